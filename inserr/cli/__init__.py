@@ -1,0 +1,1 @@
+"""Command-line interface: ``inserr <command>``; one module per command, imported lazily."""

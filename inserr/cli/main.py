@@ -1,0 +1,75 @@
+"""Entry point of the ``inserr`` command.
+
+Each sub-command lives in its own module ``inserr.cli.<name>`` exposing
+``HELP`` (one line), ``add_arguments(parser)`` and ``run(args) -> int``. Modules are
+imported only when their command runs, so ``inserr modes`` does not pay for
+matplotlib or dask.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from inserr.errors import InputError
+
+#: command name -> (module, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "modes": ("inserr.cli.modes", "Eigen-periods (Schuler, Foucault, Earth) of the error model."),
+    "drift": ("inserr.cli.drift", "Free-inertial drift of an IMU budget under an indexing scheme."),
+    "run": ("inserr.cli.run", "Run a scenario file and write a report directory."),
+    "cycle": ("inserr.cli.cycle", "Closed-form cycle integrals of an indexing scheme."),
+    "compare": ("inserr.cli.compare", "Compare indexing schemes on one scenario."),
+    "validate": ("inserr.cli.validate", "Linear prediction vs nonlinear strapdown reference."),
+    "observability": ("inserr.cli.observability", "Piecewise-constant observability analysis."),
+    "align": ("inserr.cli.align", "Kalman-filter alignment study (static or indexed)."),
+    "calibrate": ("inserr.cli.calibrate", "Multi-position gyro/accelerometer calibration."),
+    "northfind": ("inserr.cli.northfind", "Rotation-modulation north finder (1 gyro, 1 accel)."),
+    "sweep": ("inserr.cli.sweep", "Parameter sweep of a scenario on Dask."),
+}
+
+
+def _available() -> dict[str, tuple[str, str]]:
+    import importlib.util
+
+    return {k: v for k, v in COMMANDS.items() if importlib.util.find_spec(v[0]) is not None}
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser; sub-command arguments are added only for ``command``."""
+    parser = argparse.ArgumentParser(
+        prog="inserr",
+        description="Error analysis of rotation-modulated strapdown inertial navigation.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, (module, help_) in _available().items():
+        p = sub.add_parser(name, help=help_, description=help_)
+        if name == command:
+            importlib.import_module(module).add_arguments(p)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the CLI; returns the process exit status (0 ok, 2 bad input, 1 failure)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    command = next((a for a in argv if not a.startswith("-")), None)
+    parser = build_parser(command)
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 2
+    module = importlib.import_module(COMMANDS[args.command][0])
+    if getattr(args, "json", False):
+        from inserr.progress import set_quiet
+
+        set_quiet(True)
+    try:
+        return int(module.run(args) or 0)
+    except InputError as exc:
+        print(f"inserr {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,33 @@
+"""``inserr run SCENARIO.toml``: run a scenario file and write its report directory."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from inserr.cli.common import add_json_flag, emit, format_table
+from inserr.progress import progress
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", help="scenario TOML file")
+    p.add_argument("--out", default=None, help="report directory (default: <scenario stem>_report)")
+    add_json_flag(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from inserr.scenario import load_scenario
+    from inserr.summary import build_report, metrics_table, run_scheme
+
+    scen = load_scenario(args.scenario)
+    names = (scen.scheme_name,) + tuple(n for n in scen.compare if n != scen.scheme_name)
+    runs = [run_scheme(scen, n) for n in progress(names, total=len(names), desc="schemes")]
+    out = args.out or f"{Path(args.scenario).stem}_report"
+    path = build_report(scen, runs).write(out)
+    header, rows = metrics_table(runs)
+    emit(
+        args,
+        {"scenario": scen.name, "report": str(path), "runs": [r.metrics() for r in runs]},
+        format_table(header, rows) + f"\n\nreport written to {path}/report.html",
+    )
+    return 0

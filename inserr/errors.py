@@ -1,0 +1,70 @@
+"""The one exception type for bad user input.
+
+Every check of user input (CLI flag, scenario file, API argument that a user types)
+raises :class:`InputError`, which names the offending field and says how to fix it.
+The CLI turns it into a single line on stderr and a non-zero exit status, before any
+output file is written.
+"""
+
+from __future__ import annotations
+
+import math
+
+
+class InputError(ValueError):
+    """Bad input, reported as ``<field>: <problem>. Fix: <fix>``.
+
+    Parameters
+    ----------
+    field : str
+        The flag, scenario key or argument at fault (e.g. ``"--lat"``, ``"imu.gyro_bias"``).
+    problem : str
+        What is wrong with it.
+    fix : str, optional
+        What the user should do instead.
+    """
+
+    def __init__(self, field: str, problem: str, fix: str | None = None):
+        self.field = field
+        self.problem = problem
+        self.fix = fix
+        msg = f"{field}: {problem}"
+        if fix:
+            msg += f". Fix: {fix}"
+        super().__init__(msg)
+
+
+def require_finite(value: float, field: str) -> float:
+    """Return ``float(value)`` or raise :class:`InputError` if it is NaN or infinite."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(field, f"expected a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise InputError(field, f"{value!r} is not a finite number", "give a finite number")
+    return v
+
+
+def require_positive(value: float, field: str, what: str = "value") -> float:
+    """Return ``value`` if finite and > 0, else raise :class:`InputError`."""
+    v = require_finite(value, field)
+    if v <= 0:
+        raise InputError(field, f"{what} must be positive, got {v:g}", f"give a {what} > 0")
+    return v
+
+
+def require_latitude(lat_rad: float, field: str = "--lat") -> float:
+    """Check a latitude in radians is finite and strictly inside (-90 deg, 90 deg).
+
+    At the poles the local-level navigation frame has no defined north, the east
+    radius of curvature times cos(latitude) vanishes and longitude errors are
+    undefined, so the error model does not apply there.
+    """
+    v = require_finite(lat_rad, field)
+    if abs(v) >= math.pi / 2:
+        raise InputError(
+            field,
+            f"latitude {math.degrees(v):g} deg is at or beyond a pole",
+            "the ENU error model needs |latitude| < 90 deg; give e.g. 89.9",
+        )
+    return v

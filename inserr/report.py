@@ -1,0 +1,203 @@
+"""Report directories: ``report.md``, ``report.html`` (figures embedded), PNGs, ``results.json``.
+
+A :class:`Report` collects headings, paragraphs, tables and matplotlib figures, then
+:meth:`Report.write` renders everything into a temporary directory next to the
+target and renames it into place, so a failure never leaves a partial report
+directory behind and an existing report is replaced only by a complete one.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+import math
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def to_jsonable(obj: Any) -> Any:
+    """Convert numpy scalars/arrays (recursively) to plain Python for ``json.dumps``.
+
+    Non-finite floats become ``None`` so the output is strict JSON.
+    """
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (np.bool_,)):
+        return bool(obj)
+    return obj
+
+
+def dumps(obj: Any) -> str:
+    """Strict JSON text of ``obj`` (numpy-aware), indented."""
+    return json.dumps(to_jsonable(obj), indent=2, allow_nan=False)
+
+
+@dataclass
+class _Block:
+    kind: str
+    payload: Any
+
+
+@dataclass
+class Report:
+    """An ordered collection of report blocks.
+
+    Parameters
+    ----------
+    title : str
+        Report title (first heading of both the Markdown and the HTML file).
+    """
+
+    title: str
+    blocks: list[_Block] = field(default_factory=list)
+    results: dict[str, Any] = field(default_factory=dict)
+
+    def heading(self, text: str, level: int = 2) -> None:
+        """Add a section heading (level 2 = ``##``)."""
+        self.blocks.append(_Block("heading", (text, level)))
+
+    def paragraph(self, text: str) -> None:
+        """Add a paragraph of plain text (Markdown inline syntax allowed)."""
+        self.blocks.append(_Block("paragraph", text))
+
+    def table(self, header: list[str], rows: list[list[Any]], fmt: str = "{:.4g}") -> None:
+        """Add a table; floats are formatted with ``fmt``."""
+
+        def cell(v: Any) -> str:
+            if isinstance(v, (float, np.floating)):
+                return fmt.format(float(v))
+            return str(v)
+
+        self.blocks.append(_Block("table", (header, [[cell(v) for v in r] for r in rows])))
+
+    def figure(self, fig, name: str, caption: str = "") -> None:
+        """Add a matplotlib figure, saved as ``<name>.png`` and embedded in the HTML."""
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
+        self.blocks.append(_Block("figure", (name, caption, buf.getvalue())))
+
+    # --- rendering ------------------------------------------------------------
+    def markdown(self) -> str:
+        """The report as Markdown, figures linked as PNG files."""
+        out = [f"# {self.title}", ""]
+        for b in self.blocks:
+            if b.kind == "heading":
+                text, level = b.payload
+                out += ["#" * level + " " + text, ""]
+            elif b.kind == "paragraph":
+                out += [b.payload, ""]
+            elif b.kind == "table":
+                header, rows = b.payload
+                out.append("| " + " | ".join(header) + " |")
+                out.append("|" + "|".join("---" for _ in header) + "|")
+                out += ["| " + " | ".join(r) + " |" for r in rows]
+                out.append("")
+            elif b.kind == "figure":
+                name, caption, _ = b.payload
+                out += [f"![{caption or name}]({name}.png)", ""]
+                if caption:
+                    out += [f"*{caption}*", ""]
+        return "\n".join(out)
+
+    def html(self) -> str:
+        """The report as one self-contained HTML page (PNG figures base64-embedded)."""
+        esc = html.escape
+        out = [
+            "<!DOCTYPE html><html><head><meta charset='utf-8'>",
+            f"<title>{esc(self.title)}</title>",
+            "<style>body{font-family:sans-serif;max-width:60em;margin:auto;padding:1em}"
+            "table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px;"
+            "text-align:right}th{background:#eee}img{max-width:100%}</style>",
+            "</head><body>",
+            f"<h1>{esc(self.title)}</h1>",
+        ]
+        for b in self.blocks:
+            if b.kind == "heading":
+                text, level = b.payload
+                out.append(f"<h{level}>{esc(text)}</h{level}>")
+            elif b.kind == "paragraph":
+                out.append(f"<p>{esc(b.payload)}</p>")
+            elif b.kind == "table":
+                header, rows = b.payload
+                out.append("<table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in header) + "</tr>")
+                for r in rows:
+                    out.append("<tr>" + "".join(f"<td>{esc(c)}</td>" for c in r) + "</tr>")
+                out.append("</table>")
+            elif b.kind == "figure":
+                name, caption, png = b.payload
+                data = base64.b64encode(png).decode("ascii")
+                out.append(
+                    f"<figure><img alt='{esc(name)}' src='data:image/png;base64,{data}'>"
+                    f"<figcaption>{esc(caption)}</figcaption></figure>"
+                )
+        out.append("</body></html>")
+        return "\n".join(out)
+
+    def write(self, out_dir: str | os.PathLike) -> Path:
+        """Write the complete report directory atomically and return its path.
+
+        Everything is rendered into a temporary sibling directory first; only when
+        that succeeds is it renamed to ``out_dir`` (replacing an older report).
+        """
+        target = Path(out_dir).resolve()
+        target.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.parent))
+        try:
+            (tmp / "report.md").write_text(self.markdown(), encoding="utf-8")
+            (tmp / "report.html").write_text(self.html(), encoding="utf-8")
+            for b in self.blocks:
+                if b.kind == "figure":
+                    name, _, png = b.payload
+                    (tmp / f"{name}.png").write_bytes(png)
+            (tmp / "results.json").write_text(dumps(self.results), encoding="utf-8")
+            replace_dir(tmp, target)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        return target
+
+
+def replace_dir(src: Path, target: Path) -> None:
+    """Move a finished directory ``src`` to ``target``, replacing it if it exists."""
+    if target.exists():
+        old = target.with_name(f".{target.name}.old-{os.getpid()}")
+        os.replace(target, old)
+        os.replace(src, target)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(src, target)
+
+
+def write_text_atomic(path: str | os.PathLike, text: str) -> None:
+    """Write a text file atomically (temporary file in the same directory, then rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise

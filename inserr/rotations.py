@@ -1,0 +1,118 @@
+"""Rotation matrices (DCMs), Euler angles in the ENU convention, exp and log maps.
+
+Conventions (stated once, tested in ``tests/test_rotations.py``):
+
+* A DCM ``C_a^b`` maps vector components in frame a to frame b: ``v^b = C_a^b v^a``.
+* ``rot_x/rot_y/rot_z(angle)`` are the DCMs ``C_a^b`` of a frame b obtained by
+  turning frame a by ``+angle`` (right hand) about the given axis, expressed as
+  the matrix that maps b-components to a-components: ``rot_z(a) @ [1,0,0]`` is the
+  new x axis in old components. In other words ``rot_z(a) = expm(a [e_z x])``.
+* Body frame b is right-front-up (x right, y forward, z up). Heading (yaw) is
+  measured clockwise from north, so a heading rate is a rotation about the ENU up
+  axis by ``-heading``. Pitch is about body x (nose up positive), roll about body y
+  (right wing down positive).
+* ``C_b^n = rot_z(-heading) @ rot_x(pitch) @ rot_y(roll)`` (the "312" sequence
+  common in Chinese and PSINS literature, with ENU / right-front-up frames).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    """Cross-product matrix ``[v x]`` such that ``skew(v) @ w == np.cross(v, w)``.
+
+    Accepts shape (3,) or (..., 3) and returns (3, 3) or (..., 3, 3).
+    """
+    v = np.asarray(v, dtype=float)
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1] = -v[..., 2]
+    out[..., 0, 2] = v[..., 1]
+    out[..., 1, 0] = v[..., 2]
+    out[..., 1, 2] = -v[..., 0]
+    out[..., 2, 0] = -v[..., 1]
+    out[..., 2, 1] = v[..., 0]
+    return out
+
+
+def rot_axis(axis: np.ndarray, angle) -> np.ndarray:
+    """DCM ``expm(angle [axis x])`` (Rodrigues) for a unit axis; ``angle`` may be an array.
+
+    Returns shape (3, 3) for a scalar angle, (..., 3, 3) for an array of angles.
+    """
+    axis = np.asarray(axis, dtype=float)
+    angle = np.asarray(angle, dtype=float)
+    k = skew(axis)
+    s = np.sin(angle)[..., None, None]
+    c = np.cos(angle)[..., None, None]
+    return np.eye(3) + s * k + (1.0 - c) * (k @ k)
+
+
+def rot_x(angle) -> np.ndarray:
+    """Rotation by ``angle`` (rad) about x; see module conventions."""
+    return rot_axis(np.array([1.0, 0.0, 0.0]), angle)
+
+
+def rot_y(angle) -> np.ndarray:
+    """Rotation by ``angle`` (rad) about y; see module conventions."""
+    return rot_axis(np.array([0.0, 1.0, 0.0]), angle)
+
+
+def rot_z(angle) -> np.ndarray:
+    """Rotation by ``angle`` (rad) about z; see module conventions."""
+    return rot_axis(np.array([0.0, 0.0, 1.0]), angle)
+
+
+def body_to_nav(heading, pitch, roll) -> np.ndarray:
+    """``C_b^n`` from heading (clockwise from north), pitch and roll, all rad.
+
+    Body frame right-front-up, navigation frame ENU. Broadcasts over arrays.
+    """
+    heading, pitch, roll = np.broadcast_arrays(
+        np.asarray(heading, float), np.asarray(pitch, float), np.asarray(roll, float)
+    )
+    return rot_z(-heading) @ rot_x(pitch) @ rot_y(roll)
+
+
+def euler_from_dcm(c_bn: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Inverse of :func:`body_to_nav`: (heading, pitch, roll) in rad.
+
+    Heading in [0, 2 pi), pitch in [-pi/2, pi/2], roll in (-pi, pi].
+    """
+    c = np.asarray(c_bn, dtype=float)
+    pitch = np.arcsin(np.clip(c[..., 2, 1], -1.0, 1.0))
+    roll = np.arctan2(-c[..., 2, 0], c[..., 2, 2])
+    heading = np.mod(np.arctan2(c[..., 0, 1], c[..., 1, 1]), 2.0 * np.pi)
+    return heading, pitch, roll
+
+
+def heading_of(c_sn: np.ndarray) -> np.ndarray:
+    """Heading (rad, clockwise from north, [0, 2 pi)) of a frame's y axis projected on the level plane."""
+    c = np.asarray(c_sn, dtype=float)
+    return np.mod(np.arctan2(c[..., 0, 1], c[..., 1, 1]), 2.0 * np.pi)
+
+
+def log_so3(c: np.ndarray) -> np.ndarray:
+    """Rotation vector ``phi`` with ``rot_axis(phi/|phi|, |phi|) == c``; (..., 3, 3) -> (..., 3).
+
+    Accurate for angles up to just below pi, which is all the schedule needs (a
+    rotation over one sub-step is a few degrees at most).
+    """
+    c = np.asarray(c, dtype=float)
+    w = 0.5 * np.stack(
+        [c[..., 2, 1] - c[..., 1, 2], c[..., 0, 2] - c[..., 2, 0], c[..., 1, 0] - c[..., 0, 1]],
+        axis=-1,
+    )
+    s = np.linalg.norm(w, axis=-1)
+    cos = 0.5 * (np.trace(c, axis1=-2, axis2=-1) - 1.0)
+    angle = np.arctan2(s, cos)
+    small = s < 1e-12
+    factor = np.where(small, 1.0 + angle**2 / 6.0, angle / np.where(small, 1.0, s))
+    return w * factor[..., None]
+
+
+def orthonormalize(c: np.ndarray) -> np.ndarray:
+    """Nearest rotation matrix (polar decomposition via SVD); (..., 3, 3)."""
+    u, _, vt = np.linalg.svd(c)
+    return u @ vt
