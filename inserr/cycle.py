@@ -42,6 +42,18 @@ def f_x(x: float) -> np.ndarray:
     return np.array([[x, 0.0, 0.0], [0.0, s, c], [0.0, -c, s]])
 
 
+def g_z(x: float) -> np.ndarray:
+    """Antiderivative of :func:`f_z`."""
+    s, c = math.sin(x), math.cos(x)
+    return np.array([[-c, s, 0.0], [-s, -c, 0.0], [0.0, 0.0, 0.5 * x * x]])
+
+
+def g_x(x: float) -> np.ndarray:
+    """Antiderivative of :func:`f_x`."""
+    s, c = math.sin(x), math.cos(x)
+    return np.array([[0.5 * x * x, 0.0, 0.0], [0.0, -c, s], [0.0, -s, -c]])
+
+
 @dataclass(frozen=True)
 class CycleIntegrals:
     """Cycle integrals of a periodic scheme (static vehicle).
@@ -60,8 +72,22 @@ class CycleIntegrals:
         scale-factor error on IMU axis i (table rate only, Earth rate excluded).
     misalignment : (3, 6) rad
         Same for unit misalignments in the order xy, xz, yx, yz, zx, zy.
+    mean_excursion : (3, 3) s
+        Cycle average of the running integral ``U(t) = int_0^t C_s^n dt`` (from the
+        start of the run, first stop included), per unit IMU-frame bias.
+    mean_excursion_scale_factor : (3, 3) rad
+    mean_excursion_misalignment : (3, 6) rad
+        The same for the scale-factor and misalignment x table-rate terms.
     motor_starts : int
         Motor starts per cycle.
+
+    Notes
+    -----
+    A zero cycle integral is necessary but not sufficient. With gyro forcing
+    ``u = dU/dt`` periodic, ``chi = psi + U`` obeys ``chi' = -Omega x chi + Omega x U(t)``:
+    the cycle mean of the accumulated error acts through the Earth rate as a constant
+    gyro drift ``Omega x mean(U)`` (:meth:`equivalent_drift`). That is why two
+    schemes with the same (zero) cycle integral can drift very differently.
     """
 
     cycle_time: float
@@ -70,6 +96,9 @@ class CycleIntegrals:
     turns: np.ndarray
     scale_factor: np.ndarray
     misalignment: np.ndarray
+    mean_excursion: np.ndarray
+    mean_excursion_scale_factor: np.ndarray
+    mean_excursion_misalignment: np.ndarray
     motor_starts: int
 
     @property
@@ -86,6 +115,15 @@ class CycleIntegrals:
     def motor_starts_per_hour(self) -> float:
         """Motor starts per hour of operation."""
         return self.motor_starts * 3600.0 / self.cycle_time
+
+    @staticmethod
+    def equivalent_drift(earth_rate_n: np.ndarray, excursion: np.ndarray) -> np.ndarray:
+        """``Omega x mean(U)`` column by column: equivalent gyro drift (ENU) per unit error.
+
+        For a bias excursion (s) the result is dimensionless (drift per unit bias);
+        for a scale-factor or misalignment excursion (rad) it is rad/s per unit error.
+        """
+        return np.cross(earth_rate_n, np.asarray(excursion).T).T
 
 
 def cycle_integrals(scheme: TableScheme, motion: Motion | None = None) -> CycleIntegrals:
@@ -112,15 +150,15 @@ def cycle_integrals(scheme: TableScheme, motion: Motion | None = None) -> CycleI
             "cycle integrals exist for periodic open-loop schemes; use `inserr drift` for this one",
         )
     motion = motion or Motion()
-    if not isinstance(motion, Motion) or type(motion) is not Motion:
+    if type(motion) is not Motion:
         raise InputError("motion", "cycle integrals are defined on a static base")
     c_bn = motion.attitude(np.array([0.0]))[0]
     m = np.eye(3) if scheme.mounting is None else scheme.mounting
     a, b = scheme.start
-    stops = np.zeros((3, 3))
-    turns = np.zeros((3, 3))
-    sf = np.zeros((3, 3))
-    mis = np.zeros((3, 6))
+    acc = _Accumulator()
+    # The run opens with the first dwell: it sets the origin of the running integrals.
+    first = c_bn @ rot_z(a) @ rot_x(b) @ m
+    u0 = first * scheme.first_dwell
     starts = 0
     # The cycle repeats: the turn before the first one is the last turn of the cycle.
     prev_sign = math.copysign(1.0, scheme.steps[-1].angle)
@@ -129,24 +167,70 @@ def cycle_integrals(scheme: TableScheme, motion: Motion | None = None) -> CycleI
         t_turn = s.rotation_time if s.rotation_time is not None else abs(s.angle) / scheme.rate
         r = s.angle / t_turn
         if s.gimbal == "outer":
-            integ = (f_z(a + s.angle) - f_z(a)) / r @ rot_x(b) @ m
+            left, right = c_bn, rot_x(b) @ m
+            f0, f1, g0, g1 = f_z(a), f_z(a + s.angle), g_z(a), g_z(a + s.angle)
             w_s = r * (rot_x(b) @ m).T @ np.array([0.0, 0.0, 1.0])
             a += s.angle
         else:
-            integ = rot_z(a) @ (f_x(b + s.angle) - f_x(b)) / r @ m
+            left, right = c_bn @ rot_z(a), m
+            f0, f1, g0, g1 = f_x(b), f_x(b + s.angle), g_x(b), g_x(b + s.angle)
             w_s = r * m.T @ np.array([1.0, 0.0, 0.0])
             b += s.angle
-        integ_n = c_bn @ integ
-        turns += integ_n
-        for i in range(3):
-            sf[:, i] += integ_n[:, i] * w_s[i]
-        for j, name in enumerate(MISALIGNMENTS):
-            row, col = MISALIGNMENT_INDEX[name]
-            mis[:, j] += integ_n[:, row] * w_s[col]
+        single = left @ ((f1 - f0) / r) @ right
+        double = left @ ((g1 - g0) / r**2 - f0 * t_turn / r) @ right
+        acc.turn(single, double, t_turn, w_s)
         sign = math.copysign(1.0, s.angle)
         if prev_dwell > 0 or sign != prev_sign:
             starts += 1
         prev_sign, prev_dwell = sign, s.dwell
-        stops += c_bn @ rot_z(a) @ rot_x(b) @ m * s.dwell
+        acc.stop(c_bn @ rot_z(a) @ rot_x(b) @ m, s.dwell)
     cycle = scheme.cycle_time
-    return CycleIntegrals(cycle, stops + turns, stops, turns, sf, mis, starts)
+    return CycleIntegrals(
+        cycle_time=cycle,
+        full=acc.stops + acc.turns,
+        stops=acc.stops,
+        turns=acc.turns,
+        scale_factor=acc.u_sf,
+        misalignment=acc.u_mis,
+        mean_excursion=u0 + acc.s_bias / cycle,
+        mean_excursion_scale_factor=acc.s_sf / cycle,
+        mean_excursion_misalignment=acc.s_mis / cycle,
+        motor_starts=starts,
+    )
+
+
+class _Accumulator:
+    """Running first integrals ``U`` and their time integrals ``S`` over a cycle."""
+
+    def __init__(self) -> None:
+        self.stops = np.zeros((3, 3))
+        self.turns = np.zeros((3, 3))
+        self.s_bias = np.zeros((3, 3))
+        self.u_sf = np.zeros((3, 3))
+        self.s_sf = np.zeros((3, 3))
+        self.u_mis = np.zeros((3, 6))
+        self.s_mis = np.zeros((3, 6))
+
+    @property
+    def u_bias(self) -> np.ndarray:
+        return self.stops + self.turns
+
+    def stop(self, c: np.ndarray, dwell: float) -> None:
+        self.s_bias += self.u_bias * dwell + c * dwell**2 / 2
+        self.s_sf += self.u_sf * dwell
+        self.s_mis += self.u_mis * dwell
+        self.stops += c * dwell
+
+    def turn(self, single: np.ndarray, double: np.ndarray, t_turn: float, w_s: np.ndarray) -> None:
+        self.s_bias += self.u_bias * t_turn + double
+        self.turns += single
+        # Rate terms: the unit error K = e_row e_col^T gives C e_row (w_s)_col.
+        sf1 = single * w_s[None, :]
+        sf2 = double * w_s[None, :]
+        rows = [MISALIGNMENT_INDEX[n] for n in MISALIGNMENTS]
+        mis1 = np.column_stack([single[:, r] * w_s[c] for r, c in rows])
+        mis2 = np.column_stack([double[:, r] * w_s[c] for r, c in rows])
+        self.s_sf += self.u_sf * t_turn + sf2
+        self.s_mis += self.u_mis * t_turn + mis2
+        self.u_sf += sf1
+        self.u_mis += mis1

@@ -23,7 +23,7 @@ from inserr.discretize import Discretizer
 from inserr.earth import Site
 from inserr.imu import ImuErrors, InitialErrors
 from inserr.model import DR, ErrorModel, Layout, attitude_error
-from inserr.propagate import propagate_covariance, propagate_states
+from inserr.propagate import Output, propagate_covariance, propagate_outputs
 from inserr.signs import rms_norm, worst_case_norm
 from inserr.sources import Source, constant_sources, layout_for, source_matrix
 from inserr.timeline import Timeline
@@ -73,7 +73,9 @@ class DriftResult:
     @property
     def noise_horizontal_sigma(self) -> np.ndarray:
         """1-sigma radial (DRMS) horizontal error from all noise sources, m, coarse grid."""
-        tot = sum((p[:, 6, 6] + p[:, 7, 7] for p in self.noise_cov.values()), np.zeros(len(self.t_cov)))
+        tot = sum(
+            (p[:, 6, 6] + p[:, 7, 7] for p in self.noise_cov.values()), np.zeros(len(self.t_cov))
+        )
         return np.sqrt(np.maximum(tot, 0.0))
 
     @property
@@ -150,13 +152,19 @@ def analyze_drift(
     values = np.array([s.value for s in sources])
 
     t = output_grid(timeline.duration, dt_out)
-    x0 = cols @ values if sources else np.zeros(model.layout.n)
-    nav = propagate_states(disc, timeline, x0, t)
-    att = attitude_error(site, nav)
-
     t_cov = output_grid(timeline.duration, dt_cov)
+    x0 = cols @ values if sources else np.zeros(model.layout.n)
+    # One pass: column 0 is the signed sum (fine grid), the others one source each (coarse).
+    fine, coarse = propagate_outputs(
+        disc,
+        timeline,
+        np.column_stack([x0, cols * values]),
+        [Output(t, slice(0, 9), slice(0, 1)), Output(t_cov, slice(0, 9), slice(1, None))],
+    )
+    nav = fine[..., 0]
+    att = attitude_error(site, nav)
     if sources:
-        resp = propagate_states(disc, timeline, cols * values, t_cov)  # (Mc, 9, N)
+        resp = coarse  # (Mc, 9, N)
         src_h = np.moveaxis(resp[:, DR, :][:, :2, :], 1, 2)  # (Mc, N, 2)
         src_head = attitude_error(site, np.moveaxis(resp, 1, 2))[..., 2]
     else:

@@ -53,14 +53,21 @@ def radii(lat: float, height: float = 0.0) -> tuple[float, float]:
     return r_m + height, r_n + height
 
 
-def gravity(lat: float, height: float = 0.0) -> float:
+def gravity(lat, height=0.0):
     """Magnitude of normal gravity (gravitation + centrifugal), m/s^2.
 
     Somigliana's closed formula on the WGS84 ellipsoid with the linear free-air
-    height correction ``(1 - 2 h / a)``.
+    height correction ``(1 - 2 h / a)``. ``lat`` (rad) and ``height`` (m) may be
+    arrays; a float comes back for scalar inputs.
     """
-    s2 = math.sin(lat) ** 2
-    return GAMMA_E * (1.0 + _K_SOMIGLIANA * s2) / math.sqrt(1.0 - E2 * s2) * (1.0 - 2.0 * height / A)
+    s2 = np.sin(lat) ** 2
+    g = (
+        GAMMA_E
+        * (1.0 + _K_SOMIGLIANA * s2)
+        / np.sqrt(1.0 - E2 * s2)
+        * (1.0 - 2.0 * np.asarray(height) / A)
+    )
+    return float(g) if np.ndim(g) == 0 else g
 
 
 @dataclass(frozen=True)

@@ -64,7 +64,8 @@ def require_latitude(lat_rad: float, field: str = "--lat") -> float:
     if abs(v) >= math.pi / 2:
         raise InputError(
             field,
-            f"latitude {math.degrees(v):g} deg is at or beyond a pole",
-            "the ENU error model needs |latitude| < 90 deg; give e.g. 89.9",
+            f"latitude {math.degrees(v):g} deg is at or beyond a pole, "
+            "where north and east are undefined",
+            "give |latitude| < 90 deg, e.g. 89.9",
         )
     return v

@@ -25,11 +25,18 @@ from inserr.errors import InputError
 AXES = ("x", "y", "z")
 #: Misalignment names, in P1's order, and their (row, column) in K.
 MISALIGNMENTS = ("xy", "xz", "yx", "yz", "zx", "zy")
-MISALIGNMENT_INDEX = {"xy": (0, 1), "xz": (0, 2), "yx": (1, 0), "yz": (1, 2), "zx": (2, 0), "zy": (2, 1)}
+MISALIGNMENT_INDEX = {
+    "xy": (0, 1),
+    "xz": (0, 2),
+    "yx": (1, 0),
+    "yz": (1, 2),
+    "zx": (2, 0),
+    "zy": (2, 1),
+}
 
 
 def error_matrix(scale_factor: np.ndarray, misalignment: np.ndarray) -> np.ndarray:
-    """``K = S + M`` from 3 scale-factor errors and 6 misalignments (order :data:`MISALIGNMENTS`)."""
+    """``K = S + M`` from 3 scale-factor errors and 6 misalignments (:data:`MISALIGNMENTS`)."""
     k = np.diag(np.asarray(scale_factor, dtype=float))
     for value, name in zip(np.asarray(misalignment, dtype=float), MISALIGNMENTS, strict=True):
         k[MISALIGNMENT_INDEX[name]] = value
@@ -142,7 +149,9 @@ class ImuErrors:
 
     def without_noise(self) -> ImuErrors:
         """The deterministic part only (noise and bias instability removed)."""
-        return replace(self, arw=0.0, vrw=0.0, gyro_bias_instability=0.0, accel_bias_instability=0.0)
+        return replace(
+            self, arw=0.0, vrw=0.0, gyro_bias_instability=0.0, accel_bias_instability=0.0
+        )
 
     def scaled(self, factor: float) -> ImuErrors:
         """Every error (not correlation times) multiplied by ``factor``."""

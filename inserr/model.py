@@ -155,7 +155,9 @@ class ErrorModel:
     def __post_init__(self) -> None:
         if self.vertical not in VERTICAL_MODES:
             raise InputError(
-                "vertical", f"unknown vertical-channel mode {self.vertical!r}", "use clamped or free"
+                "vertical",
+                f"unknown vertical-channel mode {self.vertical!r}",
+                "use clamped or free",
             )
 
     # --- continuous-time matrices ---------------------------------------------
@@ -217,6 +219,101 @@ class ErrorModel:
         if self.vertical == "clamped":
             a[[5, 8], :] = 0.0
         return a
+
+    def exo_transition(self, omega_n: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """Closed-form ``expm(E(w) s)`` of the exo block (states after the nine nav states).
+
+        Every exo block is a rotation of n-resolved quantities: vectors turn with
+        ``R = expm(s [w x])`` (Rodrigues), matrices ``K^n`` with ``R K R^T`` (``R kron R``
+        on the row-major vector), Gauss-Markov states also decay by ``exp(-s / tau)``.
+
+        Parameters
+        ----------
+        omega_n : (K, 3) rad/s
+        s : (J,) s
+
+        Returns
+        -------
+        ndarray, shape (K, J, m, m) with m = n - 9.
+        """
+        lay = self.layout
+        w = np.asarray(omega_n, dtype=float).reshape(-1, 3)
+        s = np.asarray(s, dtype=float).reshape(-1)
+        r = self._rodrigues(w, s)  # (K, J, 3, 3)
+        m = lay.n - N_NAV
+        out = np.zeros((len(w), len(s), m, m))
+        rr = None
+        for key in ("eps", "nabla", "kg", "ka", "bg", "ba"):
+            if key not in lay.slices:
+                continue
+            sl = slice(lay[key].start - N_NAV, lay[key].stop - N_NAV)
+            if key in ("kg", "ka"):
+                if rr is None:
+                    rr = np.einsum("...ij,...kl->...ikjl", r, r).reshape(len(w), len(s), 9, 9)
+                out[..., sl, sl] = rr
+            elif key == "bg":
+                out[..., sl, sl] = r * np.exp(-s / self.gyro_correlation_time)[None, :, None, None]
+            elif key == "ba":
+                out[..., sl, sl] = r * np.exp(-s / self.accel_correlation_time)[None, :, None, None]
+            else:
+                out[..., sl, sl] = r
+        return out
+
+    def coupled_exo(self, omega_n: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """Closed-form ``B(w) expm(E(w) s)``: how exo states at time 0 drive psi and dv at time s.
+
+        ``B(w)`` is the nav-by-exo block of :meth:`matrix`. With ``R = expm(s [w x])``
+        the bias columns are ``-R`` (psi) and ``R`` (dv); a matrix state ``K^n`` acts
+        through ``R K R^T v`` (v = ``Omega + w`` for the gyros, f for the accelerometers),
+        i.e. the 3x9 block ``R kron (R^T v)^T``.
+
+        Parameters
+        ----------
+        omega_n : (K, 3) rad/s
+        s : (J,) s
+
+        Returns
+        -------
+        ndarray, shape (K, J, 9, m)
+        """
+        lay = self.layout
+        w = np.asarray(omega_n, dtype=float).reshape(-1, 3)
+        s = np.asarray(s, dtype=float).reshape(-1)
+        r = self._rodrigues(w, s)  # (K, J, 3, 3)
+        out = np.zeros((len(w), len(s), N_NAV, lay.n - N_NAV))
+        dv_mask = np.array([1.0, 1.0, 0.0 if self.vertical == "clamped" else 1.0])[:, None]
+
+        def cols(key: str) -> slice:
+            return slice(lay[key].start - N_NAV, lay[key].stop - N_NAV)
+
+        def kron_rows(v: np.ndarray) -> np.ndarray:
+            rtv = np.einsum("kjab,ka->kjb", r, v)  # R^T v, (K, J, 3)
+            return np.einsum("kjab,kjc->kjabc", r, rtv).reshape(len(w), len(s), 3, 9)
+
+        if lay.bias:
+            out[:, :, PSI, cols("eps")] = -r
+            out[:, :, DV, cols("nabla")] = dv_mask * r
+        if lay.scale_misalignment:
+            out[:, :, PSI, cols("kg")] = -kron_rows(self.site.earth_rate_n + w)
+            f = np.broadcast_to(self.site.specific_force_n, w.shape)
+            out[:, :, DV, cols("ka")] = dv_mask * kron_rows(f)
+        if lay.bias_instability:
+            out[:, :, PSI, cols("bg")] = (
+                -r * np.exp(-s / self.gyro_correlation_time)[None, :, None, None]
+            )
+            out[:, :, DV, cols("ba")] = (
+                dv_mask * r * np.exp(-s / self.accel_correlation_time)[None, :, None, None]
+            )
+        return out
+
+    @staticmethod
+    def _rodrigues(w: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """``expm(s [w x])`` for every w (K, 3) and s (J,): (K, J, 3, 3)."""
+        rate = np.linalg.norm(w, axis=1)
+        axis = w / np.where(rate > 0, rate, 1.0)[:, None]
+        kx = skew(axis)[:, None]
+        ang = (rate[:, None] * s[None, :])[..., None, None]
+        return np.eye(3) + np.sin(ang) * kx + (1.0 - np.cos(ang)) * (kx @ kx)
 
     def noise_input(self) -> np.ndarray:
         """Unit-intensity white-noise input matrix G (n x 12).
@@ -330,9 +427,12 @@ class Modes:
     Attributes
     ----------
     schuler_period_s : float
-        2 pi / (mean of the two Schuler-band eigen-frequencies).
+        2 pi / (geometric mean of the two Schuler-band eigen-frequencies). For a
+        spherical Earth the pair is ``sqrt(ws^2 + ou^2) +- ou`` (``ou = Omega sin L``),
+        whose product is exactly ``ws^2 = g / R``.
     foucault_period_s : float
-        2 pi / (half their difference); inf if they coincide.
+        2 pi / (half their difference, exactly ``ou`` on a spherical Earth); inf if
+        they coincide.
     earth_period_s : float
         2 pi / (the Earth-band eigen-frequency of the psi block).
     eigenvalues : ndarray
@@ -367,7 +467,7 @@ def modes(model: ErrorModel) -> Modes:
     split = 0.5 * (w_hi - w_lo)
     vert = ev.real[ev.real > 1e-8]
     return Modes(
-        schuler_period_s=2.0 * math.pi / (0.5 * (w_hi + w_lo)),
+        schuler_period_s=2.0 * math.pi / math.sqrt(w_hi * w_lo),
         foucault_period_s=2.0 * math.pi / split if split > 0 else math.inf,
         earth_period_s=2.0 * math.pi / earth[0],
         eigenvalues=ev,

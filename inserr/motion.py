@@ -62,7 +62,9 @@ class Motion:
     def attitude(self, t: np.ndarray) -> np.ndarray:
         """``C_b^n`` at times ``t`` (s); shape (len(t), 3, 3)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        return body_to_nav(self.heading_at(t), np.full(t.shape, self.pitch), np.full(t.shape, self.roll))
+        return body_to_nav(
+            self.heading_at(t), np.full(t.shape, self.pitch), np.full(t.shape, self.roll)
+        )
 
     def rate_n(self, t: np.ndarray) -> np.ndarray:
         """Body angular velocity relative to n, resolved in n (rad/s); (len(t), 3)."""
@@ -78,7 +80,8 @@ class Motion:
     def describe(self) -> str:
         """One-line human description."""
         return (
-            f"static, heading {math.degrees(self.heading):g} deg, pitch {math.degrees(self.pitch):g} deg, "
+            f"static, heading {math.degrees(self.heading):g} deg, "
+            f"pitch {math.degrees(self.pitch):g} deg, "
             f"roll {math.degrees(self.roll):g} deg"
         )
 
@@ -122,7 +125,8 @@ class YawSwing(Motion):
     def describe(self):
         return (
             f"yaw swing {math.degrees(self.amplitude):g} deg/s peak, period {self.period:g} s "
-            f"(heading amplitude {math.degrees(self.amplitude * self.period / (2 * math.pi)):.3g} deg), "
+            "(heading amplitude "
+            f"{math.degrees(self.amplitude * self.period / (2 * math.pi)):.3g} deg), "
             f"pitch {math.degrees(self.pitch):g} deg, roll {math.degrees(self.roll):g} deg"
         )
 
@@ -147,7 +151,10 @@ class Turn(Motion):
         return np.full(np.shape(t), self.rate, dtype=float)
 
     def describe(self):
-        return f"turn at {math.degrees(self.rate):g} deg/s from heading {math.degrees(self.heading):g} deg"
+        return (
+            f"turn at {math.degrees(self.rate):g} deg/s "
+            f"from heading {math.degrees(self.heading):g} deg"
+        )
 
 
 @dataclass(frozen=True)
@@ -169,7 +176,9 @@ class HeadingHistory(Motion):
         t = np.asarray(self.times, dtype=float)
         h = np.asarray(self.headings, dtype=float)
         if t.ndim != 1 or t.shape != h.shape or len(t) < 2:
-            raise InputError("motion.heading_history", "needs matching time and heading columns (>= 2 rows)")
+            raise InputError(
+                "motion.heading_history", "needs matching time and heading columns (>= 2 rows)"
+            )
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(h))):
             raise InputError("motion.heading_history", "contains a non-finite value")
         if t[0] != 0.0 or np.any(np.diff(t) <= 0):

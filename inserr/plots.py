@@ -27,15 +27,35 @@ def horizontal_error(results: dict, title: str = "Horizontal position error") ->
     fig, ax = plt.subplots(figsize=(8, 4.5))
     for i, (name, r) in enumerate(results.items()):
         color = f"C{i}"
-        ax.plot(r.t / HOUR, r.horizontal / NMI, color=color, lw=1.0, label=f"{name} (signs as given)")
+        ax.plot(
+            r.t / HOUR, r.horizontal / NMI, color=color, lw=1.0, label=f"{name} (signs as given)"
+        )
         if len(results) == 1:
-            ax.plot(r.t_cov / HOUR, r.rms_horizontal / NMI, color="C1", lw=1.0, ls="--", label="RMS, unknown signs")
-            ax.plot(r.t_cov / HOUR, r.worst_horizontal / NMI, color="C3", lw=0.8, ls=":", label="worst sign pattern")
+            ax.plot(
+                r.t_cov / HOUR,
+                r.rms_horizontal / NMI,
+                color="C1",
+                lw=1.0,
+                ls="--",
+                label="RMS, unknown signs",
+            )
+            ax.plot(
+                r.t_cov / HOUR,
+                r.worst_horizontal / NMI,
+                color="C3",
+                lw=0.8,
+                ls=":",
+                label="worst sign pattern",
+            )
             sig = r.noise_horizontal_sigma
             if np.any(sig > 0):
                 base = np.interp(r.t_cov, r.t, r.horizontal)
                 ax.fill_between(
-                    r.t_cov / HOUR, (base - sig) / NMI, (base + sig) / NMI, color=color, alpha=0.2,
+                    r.t_cov / HOUR,
+                    (base - sig) / NMI,
+                    (base + sig) / NMI,
+                    color=color,
+                    alpha=0.2,
                     label="noise 1-sigma envelope",
                 )
     ax.set_xlabel("time (h)")
@@ -49,7 +69,11 @@ def horizontal_error(results: dict, title: str = "Horizontal position error") ->
 def attitude_errors(results: dict) -> plt.Figure:
     """Level tilts (arcsec) and heading error (arcmin) of the deterministic run(s)."""
     fig, axes = plt.subplots(3, 1, figsize=(8, 6.5), sharex=True)
-    labels = ("east tilt phi_E (arcsec)", "north tilt phi_N (arcsec)", "heading error phi_U (arcmin)")
+    labels = (
+        "east tilt phi_E (arcsec)",
+        "north tilt phi_N (arcsec)",
+        "heading error phi_U (arcmin)",
+    )
     scale = (ARCSEC, ARCSEC, ARCMIN)
     for i, (name, r) in enumerate(results.items()):
         for k in range(3):
@@ -62,7 +86,9 @@ def attitude_errors(results: dict) -> plt.Figure:
     return fig
 
 
-def error_budget(budget: dict[str, float], top: int = 15, title: str = "Error budget at the end") -> plt.Figure:
+def error_budget(
+    budget: dict[str, float], top: int = 15, title: str = "Error budget at the end"
+) -> plt.Figure:
     """Horizontal bar chart of per-source RMS horizontal error (nmi)."""
     items = sorted(budget.items(), key=lambda kv: -kv[1])[:top][::-1]
     fig, ax = plt.subplots(figsize=(7, 0.35 * max(len(items), 3) + 1))

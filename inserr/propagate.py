@@ -12,7 +12,8 @@ response to N error sources costs little more than the response to one.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -25,7 +26,7 @@ POWER_BLOCK = 512
 
 @dataclass(frozen=True)
 class Steps:
-    """The merged step list of a timeline and an output grid.
+    """The merged step list of a timeline and one or more output grids.
 
     Attributes
     ----------
@@ -34,8 +35,8 @@ class Steps:
     key : (S,) int
         Index into the unique ``(w, dt)`` pairs.
     unique_omega, unique_dt : the unique pairs.
-    record : (S,) int
-        Output index recorded at the end of each step, -1 if none.
+    records : list of (S,) int
+        Per output grid: the output index recorded at the end of each step, -1 if none.
     """
 
     dt: np.ndarray
@@ -43,10 +44,20 @@ class Steps:
     key: np.ndarray
     unique_omega: np.ndarray
     unique_dt: np.ndarray
-    record: np.ndarray
+    records: list[np.ndarray]
+
+    @property
+    def record(self) -> np.ndarray:
+        """Record indices of the first output grid."""
+        return self.records[0]
 
 
-def make_steps(timeline: Timeline, t_out: np.ndarray, use_omega: bool = True) -> Steps:
+def make_steps(
+    timeline: Timeline,
+    t_out: np.ndarray,
+    use_omega: bool = True,
+    extra_grids: Sequence[np.ndarray] = (),
+) -> Steps:
     """Merge interval boundaries and output times into one step list.
 
     Parameters
@@ -58,13 +69,13 @@ def make_steps(timeline: Timeline, t_out: np.ndarray, use_omega: bool = True) ->
     use_omega : bool
         If False (model without rotating states), interval boundaries are ignored:
         the steps are just the output intervals.
+    extra_grids : sequence of arrays
+        Further output grids (each gets its own record array).
     """
-    t_out = np.asarray(t_out, dtype=float)
+    grids = [np.asarray(t_out, dtype=float), *(np.asarray(g, dtype=float) for g in extra_grids)]
     end = timeline.duration
-    if use_omega:
-        nodes = np.union1d(timeline.times, t_out)
-    else:
-        nodes = np.union1d([0.0, end], t_out)
+    base = timeline.times if use_omega else np.array([0.0, end])
+    nodes = np.unique(np.concatenate([base, *grids]))
     # Merge times closer than the dt quantum (e.g. an output time equal to a node
     # up to rounding): they would give zero-length steps.
     keep = np.concatenate([[True], np.diff(nodes) > 10 * DT_QUANTUM])
@@ -82,30 +93,29 @@ def make_steps(timeline: Timeline, t_out: np.ndarray, use_omega: bool = True) ->
     starts = np.concatenate([[True], np.any(keys[1:] != keys[:-1], axis=1)])
     uniq, inv_runs = np.unique(keys[starts], axis=0, return_inverse=True)
     inverse = inv_runs.reshape(-1)[np.cumsum(starts) - 1]
-    # Record index: for each output time > 0, the step that ends closest to it.
-    record = np.full(len(dt), -1, dtype=np.int64)
+    records = []
     ends = nodes[1:]
-    pos = np.searchsorted(ends, t_out - 10 * DT_QUANTUM)
-    valid = (t_out > 10 * DT_QUANTUM) & (pos < len(ends))
-    record[pos[valid]] = np.nonzero(valid)[0]
+    for g in grids:
+        # For each output time > 0, the step that ends at it (to within the quantum).
+        record = np.full(len(dt), -1, dtype=np.int64)
+        pos = np.searchsorted(ends, g - 10 * DT_QUANTUM)
+        valid = (g > 10 * DT_QUANTUM) & (pos < len(ends))
+        record[pos[valid]] = np.nonzero(valid)[0]
+        records.append(record)
     return Steps(
         dt=dt,
         omega_n=uniq[inverse, :3] * OMEGA_QUANTUM,
         key=inverse.reshape(-1),
         unique_omega=uniq[:, :3] * OMEGA_QUANTUM,
         unique_dt=uniq[:, 3] * DT_QUANTUM,
-        record=record,
+        records=records,
     )
 
 
-def _runs(key: np.ndarray) -> list[tuple[int, int]]:
-    """(start, stop) of maximal runs of equal consecutive keys."""
-    if len(key) == 0:
-        return []
+def _runs(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Starts and stops of maximal runs of equal consecutive keys."""
     change = np.nonzero(np.diff(key))[0] + 1
-    starts = np.concatenate([[0], change])
-    stops = np.concatenate([change, [len(key)]])
-    return list(zip(starts.tolist(), stops.tolist(), strict=True))
+    return np.concatenate([[0], change]), np.concatenate([change, [len(key)]])
 
 
 class _Powers:
@@ -131,20 +141,92 @@ class _Powers:
 
 
 def _iter_runs(disc: Discretizer, steps: Steps, group: int = 4096):
-    """Yield ``(start, stop, key, Phi, powers)`` per run, discretizing a group of runs at a time.
+    """Yield ``(start, stop, key, Phi)`` per run, discretizing a group of runs at a time.
 
     Grouping keeps memory bounded when continuous motion yields many distinct steps.
     """
-    runs = _runs(steps.key)
-    powers = _Powers()
-    for g in range(0, len(runs), group):
-        chunk = runs[g : g + group]
-        ks = sorted({int(steps.key[a]) for a, _ in chunk})
+    if len(steps.key) == 0:
+        return
+    starts, stops = _runs(steps.key)
+    for g in range(0, len(starts), group):
+        a_s, b_s = starts[g : g + group], stops[g : g + group]
+        kk = steps.key[a_s]
+        ks = np.unique(kk)
         mats = disc.transitions(steps.unique_omega[ks], steps.unique_dt[ks])
-        phi_of = dict(zip(ks, mats, strict=True))
-        for a, b in chunk:
-            k = int(steps.key[a])
-            yield a, b, k, phi_of[k], powers
+        phi_of = dict(zip(ks.tolist(), mats, strict=True))
+        for a, b, k in zip(a_s.tolist(), b_s.tolist(), kk.tolist(), strict=True):
+            yield a, b, k, phi_of[k]
+
+
+@dataclass(frozen=True)
+class Output:
+    """What to record: states ``rows`` of columns ``cols`` at times ``t`` (s)."""
+
+    t: np.ndarray
+    rows: slice | np.ndarray = field(default_factory=lambda: slice(0, 9))
+    cols: slice | np.ndarray = field(default_factory=lambda: slice(None))
+
+
+def propagate_outputs(
+    disc: Discretizer, timeline: Timeline, x0: np.ndarray, outputs: Sequence[Output]
+) -> list[np.ndarray]:
+    """Deterministic propagation of state columns, recorded on several output grids at once.
+
+    One pass over the timeline serves every grid, so an expensive continuous-motion
+    timeline is discretized once. Returns one array (M_o, len(rows_o), len(cols_o))
+    per output.
+    """
+    n = disc.model.layout.n
+    x = np.array(x0, dtype=float).reshape(n, -1)
+    # Index with slices where possible: basic indexing is a cheap view in the hot loop.
+    idx_rows = [o.rows if isinstance(o.rows, slice) else np.asarray(o.rows) for o in outputs]
+    idx_cols = [o.cols if isinstance(o.cols, slice) else np.asarray(o.cols) for o in outputs]
+    sizes = [
+        (len(np.arange(n)[r]), len(np.arange(x.shape[1])[c]))
+        for r, c in zip(idx_rows, idx_cols, strict=True)
+    ]
+    outs = [np.empty((len(o.t), *sz)) for o, sz in zip(outputs, sizes, strict=True)]
+
+    def pick(v: np.ndarray, r, c) -> np.ndarray:
+        if isinstance(r, slice) or isinstance(c, slice):
+            return (
+                v[r][:, c]
+                if not isinstance(r, slice)
+                else v[r, c]
+                if isinstance(c, slice)
+                else v[r][:, c]
+            )
+        return v[np.ix_(r, c)]
+
+    for o, out, r, c in zip(outputs, outs, idx_rows, idx_cols, strict=True):
+        if len(o.t) and o.t[0] <= 10 * DT_QUANTUM:
+            out[0] = pick(x, r, c)
+    steps = make_steps(
+        timeline, outputs[0].t, disc.model.layout.rotating, [o.t for o in outputs[1:]]
+    )
+    powers = _Powers()
+    recs = steps.records
+    for start, stop, k, phi in _iter_runs(disc, steps):
+        length = stop - start
+        if length == 1:
+            x = phi @ x
+            for rec, out, r, c in zip(recs, outs, idx_rows, idx_cols, strict=True):
+                j = rec[start]
+                if j >= 0:
+                    out[j] = pick(x, r, c)
+            continue
+        done = 0
+        while done < length:
+            block = min(POWER_BLOCK, length - done)
+            pw = powers.get(k, phi, block)
+            for rec, out, r, c in zip(recs, outs, idx_rows, idx_cols, strict=True):
+                rr = rec[start + done : start + done + block]
+                sel = rr >= 0
+                if np.any(sel):
+                    out[rr[sel]] = np.einsum("jab,bc->jac", pw[sel][:, r, :], x[:, c])
+            x = pw[block - 1] @ x
+            done += block
+    return outs
 
 
 def propagate_states(
@@ -174,32 +256,12 @@ def propagate_states(
     ndarray, shape (M, len(rows), N) — or (M, len(rows)) for a 1-D ``x0``.
     """
     squeeze = np.ndim(x0) == 1
-    x = np.array(x0, dtype=float).reshape(disc.model.layout.n, -1)
-    rows = slice(0, 9) if rows is None else rows
-    n_rec = len(np.arange(disc.model.layout.n)[rows])
-    t_out = np.asarray(t_out, dtype=float)
-    out = np.empty((len(t_out), n_rec, x.shape[1]))
-    if len(t_out) and t_out[0] <= 10 * DT_QUANTUM:
-        out[0] = x[rows]
-    steps = make_steps(timeline, t_out, use_omega=disc.model.layout.rotating)
-    for start, stop, k, phi, powers in _iter_runs(disc, steps):
-        rec = steps.record[start:stop]
-        length = stop - start
-        if length == 1:
-            x = phi @ x
-            if rec[0] >= 0:
-                out[rec[0]] = x[rows]
-            continue
-        done = 0
-        while done < length:
-            block = min(POWER_BLOCK, length - done)
-            pw = powers.get(k, phi, block)
-            r = rec[done : done + block]
-            sel = r >= 0
-            if np.any(sel):
-                out[r[sel]] = np.einsum("jab,bc->jac", pw[sel][:, rows, :], x)
-            x = pw[block - 1] @ x
-            done += block
+    out = propagate_outputs(
+        disc,
+        timeline,
+        x0,
+        [Output(np.asarray(t_out, float), slice(0, 9) if rows is None else rows)],
+    )[0]
     return out[..., 0] if squeeze else out
 
 
@@ -236,12 +298,12 @@ def propagate_covariance(
     if len(t_out) and t_out[0] <= 10 * DT_QUANTUM:
         out[0] = p
     steps = make_steps(timeline, t_out, use_omega=disc.model.layout.rotating)
-    for start, stop, _, phi, _ in _iter_runs(disc, steps):
-        w, h = steps.omega_n[start], steps.dt[start]
-        qd = disc.noise(w, h)
+    rec = steps.record
+    for start, stop, _, phi in _iter_runs(disc, steps):
+        qd = disc.noise(steps.omega_n[start], steps.dt[start])
         for i in range(start, stop):
             p = phi @ p @ phi.T + qd
-            r = steps.record[i]
+            r = rec[i]
             if r >= 0:
                 out[r] = 0.5 * (p + p.T)
     return out

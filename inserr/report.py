@@ -153,17 +153,19 @@ class Report:
         out.append("</body></html>")
         return "\n".join(out)
 
-    def write(self, out_dir: str | os.PathLike) -> Path:
+    def write(self, out_dir: str | os.PathLike, markdown_name: str = "report.md") -> Path:
         """Write the complete report directory atomically and return its path.
 
         Everything is rendered into a temporary sibling directory first; only when
         that succeeds is it renamed to ``out_dir`` (replacing an older report).
+        ``markdown_name`` names the Markdown file (analyses use ``REPORT.md``).
         """
         target = Path(out_dir).resolve()
         target.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.parent))
         try:
-            (tmp / "report.md").write_text(self.markdown(), encoding="utf-8")
+            tmp.chmod(0o755)  # mkdtemp makes it private; a report is meant to be shared
+            (tmp / markdown_name).write_text(self.markdown(), encoding="utf-8")
             (tmp / "report.html").write_text(self.html(), encoding="utf-8")
             for b in self.blocks:
                 if b.kind == "figure":

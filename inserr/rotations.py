@@ -88,7 +88,7 @@ def euler_from_dcm(c_bn: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def heading_of(c_sn: np.ndarray) -> np.ndarray:
-    """Heading (rad, clockwise from north, [0, 2 pi)) of a frame's y axis projected on the level plane."""
+    """Heading (rad, clockwise from north, in [0, 2 pi)) of a frame's level-projected y axis."""
     c = np.asarray(c_sn, dtype=float)
     return np.mod(np.arctan2(c[..., 0, 1], c[..., 1, 1]), 2.0 * np.pi)
 

@@ -91,7 +91,13 @@ SCHEMA: dict[str, dict[str, tuple[str, int | None, Any]]] = {
 }
 
 MOTION_TYPES = ("static", "yaw-swing", "turn", "heading-history")
-STEP_KEYS = {"gimbal": "str", "angle": "angle", "dwell": "time", "rotation_time": "time", "label": "str"}
+STEP_KEYS = {
+    "gimbal": "str",
+    "angle": "angle",
+    "dwell": "time",
+    "rotation_time": "time",
+    "label": "str",
+}
 
 
 @dataclass(frozen=True)
@@ -144,7 +150,9 @@ class Scenario:
         for key, value in changes.items():
             section, _, name = key.partition(".")
             if section not in SCHEMA or name not in SCHEMA[section]:
-                raise InputError(key, "unknown scenario key", f"use one of: {', '.join(all_keys())}")
+                raise InputError(
+                    key, "unknown scenario key", f"use one of: {', '.join(all_keys())}"
+                )
             raw.setdefault(section, {})[name] = value
         return scenario_from_dict(raw, self.base_dir)
 
@@ -213,7 +221,9 @@ def load_scenario(path: str | Path) -> Scenario:
     try:
         data = tomllib.loads(p.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
-        raise InputError(str(path), f"malformed TOML ({exc})", "fix the syntax at that line") from None
+        raise InputError(
+            str(path), f"malformed TOML ({exc})", "fix the syntax at that line"
+        ) from None
     return scenario_from_dict(data, base_dir=p.parent)
 
 
@@ -222,13 +232,17 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
     raw: dict[str, dict[str, Any]] = {}
     for section, table in data.items():
         if section not in SCHEMA:
-            raise InputError(section, "unknown scenario section", f"use one of: {', '.join(SCHEMA)}")
+            raise InputError(
+                section, "unknown scenario section", f"use one of: {', '.join(SCHEMA)}"
+            )
         if not isinstance(table, dict):
             raise InputError(section, "must be a table ([section])")
         for key in table:
             if key not in SCHEMA[section]:
                 raise InputError(
-                    f"{section}.{key}", "unknown scenario key", f"use one of: {', '.join(SCHEMA[section])}"
+                    f"{section}.{key}",
+                    "unknown scenario key",
+                    f"use one of: {', '.join(SCHEMA[section])}",
                 )
         raw[section] = dict(table)
     v: dict[str, dict[str, Any]] = {}
@@ -238,12 +252,16 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
             given = raw.get(section, {}).get(key, default)
             v[section][key] = _value(section, key, given)
 
-    sc, si, im, ini, mo, sh, out = (v[k] for k in ("scenario", "site", "imu", "initial", "motion", "scheme", "output"))
+    sc, si, im, ini, mo, sh, out = (
+        v[k] for k in ("scenario", "site", "imu", "initial", "motion", "scheme", "output")
+    )
     duration = sc["duration"]
     if duration <= 0:
         raise InputError("scenario.duration", f"must be > 0, got {duration:g} s", "give e.g. 72 h")
     if si["earth"] not in ("ellipsoid", "spherical"):
-        raise InputError("site.earth", f"unknown Earth model {si['earth']!r}", "use ellipsoid or spherical")
+        raise InputError(
+            "site.earth", f"unknown Earth model {si['earth']!r}", "use ellipsoid or spherical"
+        )
     site = Site(si["latitude"], si["longitude"], si["height"], spherical=si["earth"] == "spherical")
     mis = {}
     for name in ("gyro_misalignment", "accel_misalignment"):
@@ -274,7 +292,9 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
         if out[key] <= 0:
             raise InputError(f"output.{key}", "must be > 0", "give e.g. 1 s")
     if out["vertical"] not in ("clamped", "free"):
-        raise InputError("output.vertical", f"unknown mode {out['vertical']!r}", "use clamped or free")
+        raise InputError(
+            "output.vertical", f"unknown mode {out['vertical']!r}", "use clamped or free"
+        )
     opts: dict[str, Any] = {
         "reversal": sh["reversal"],
         "delta": sh["delta"],
@@ -333,11 +353,17 @@ def _motion(mo: dict, base_dir: Path | None) -> Motion:
         try:
             arr = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
         except ValueError as exc:
-            raise InputError("motion.file", f"cannot read {path}: {exc}", "two columns: time_s, heading_deg") from None
+            raise InputError(
+                "motion.file", f"cannot read {path}: {exc}", "two columns: time_s, heading_deg"
+            ) from None
         if arr.shape[1] != 2:
             raise InputError("motion.file", "needs two columns: time_s, heading_deg")
-        return HeadingHistory(pitch=mo["pitch"], roll=mo["roll"], times=arr[:, 0], headings=np.unwrap(arr[:, 1] * DEG))
-    raise InputError("motion.type", f"unknown motion {kind!r}", f"use one of: {', '.join(MOTION_TYPES)}")
+        return HeadingHistory(
+            pitch=mo["pitch"], roll=mo["roll"], times=arr[:, 0], headings=np.unwrap(arr[:, 1] * DEG)
+        )
+    raise InputError(
+        "motion.type", f"unknown motion {kind!r}", f"use one of: {', '.join(MOTION_TYPES)}"
+    )
 
 
 def _steps(rows: list[dict]):

@@ -52,7 +52,11 @@ def build_timeline(
     labels: list[str] = []
     exact_flags: list[np.ndarray] = []
 
-    seg = np.clip(np.searchsorted(table.t0, 0.5 * (breaks[:-1] + breaks[1:]), side="right") - 1, 0, len(table) - 1)
+    seg = np.clip(
+        np.searchsorted(table.t0, 0.5 * (breaks[:-1] + breaks[1:]), side="right") - 1,
+        0,
+        len(table) - 1,
+    )
     for (a, b), k in zip(zip(breaks[:-1], breaks[1:], strict=True), seg, strict=True):
         if b - a <= 1e-9:
             continue
@@ -110,7 +114,9 @@ def build_timeline(
     )
 
 
-def _attitudes(table: TableSchedule, motion: Motion, t: np.ndarray, chunk: int = 200_000) -> np.ndarray:
+def _attitudes(
+    table: TableSchedule, motion: Motion, t: np.ndarray, chunk: int = 200_000
+) -> np.ndarray:
     """Exact ``C_s^n`` at the node times, in chunks to bound memory."""
     out = np.empty((len(t), 3, 3))
     for i in range(0, len(t), chunk):

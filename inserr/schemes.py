@@ -104,7 +104,9 @@ class TableScheme:
         while b.t < duration:
             for s in self.steps:
                 rate = abs(s.angle) / self._turn_time(s)
-                b.rotate(s.gimbal, s.angle, rate, f"{s.gimbal} {math.degrees(s.angle):+g} -> {s.label}")
+                b.rotate(
+                    s.gimbal, s.angle, rate, f"{s.gimbal} {math.degrees(s.angle):+g} -> {s.label}"
+                )
                 b.stop(s.dwell, f"stop {s.label}")
                 if b.t >= duration:
                     break
@@ -177,10 +179,26 @@ def four_position(rate: float, stop: float, modified: bool = False) -> TableSche
 # exhaustive search over +-180 deg turn sequences as one that also cancels the
 # misalignment x rate terms, which is the stated purpose of 16-position schemes;
 # the cancellation is verified in closed form in tests, not taken on trust.
-_EIGHT = (("outer", +1), ("inner", +1), ("outer", +1), ("inner", +1),
-          ("outer", -1), ("inner", -1), ("outer", -1), ("inner", -1))
-_EIGHT_INNER_FIRST = (("inner", +1), ("outer", +1), ("inner", +1), ("outer", +1),
-                      ("inner", -1), ("outer", -1), ("inner", -1), ("outer", -1))
+_EIGHT = (
+    ("outer", +1),
+    ("inner", +1),
+    ("outer", +1),
+    ("inner", +1),
+    ("outer", -1),
+    ("inner", -1),
+    ("outer", -1),
+    ("inner", -1),
+)
+_EIGHT_INNER_FIRST = (
+    ("inner", +1),
+    ("outer", +1),
+    ("inner", +1),
+    ("outer", +1),
+    ("inner", -1),
+    ("outer", -1),
+    ("inner", -1),
+    ("outer", -1),
+)
 
 
 def _dual_axis_steps(seq, stop: float, prefix: str) -> list[Step]:
@@ -189,11 +207,13 @@ def _dual_axis_steps(seq, stop: float, prefix: str) -> list[Step]:
 
 def eight_position(rate: float, stop: float) -> TableScheme:
     """Dual-axis eight-position cycle (see module comment for the order and source)."""
-    return TableScheme("eight-position", tuple(_dual_axis_steps(_EIGHT, stop, "P")), rate, stop, start_label="P0")
+    return TableScheme(
+        "eight-position", tuple(_dual_axis_steps(_EIGHT, stop, "P")), rate, stop, start_label="P0"
+    )
 
 
 def sixteen_position(rate: float, stop: float) -> TableScheme:
-    """Dual-axis sixteen-position cycle: eight-position, then the same started on the inner gimbal."""
+    """Dual-axis sixteen-position: eight-position, then the same started on the inner gimbal."""
     steps = _dual_axis_steps(_EIGHT, stop, "P") + _dual_axis_steps(_EIGHT_INNER_FIRST, stop, "Q")
     return TableScheme("sixteen-position", tuple(steps), rate, stop, start_label="P0")
 
@@ -244,7 +264,9 @@ class FlexibleTwoPosition:
 
     def __post_init__(self) -> None:
         if self.variant not in ("threshold", "crossing"):
-            raise InputError("scheme.variant", f"unknown variant {self.variant!r}", "use threshold or crossing")
+            raise InputError(
+                "scheme.variant", f"unknown variant {self.variant!r}", "use threshold or crossing"
+            )
 
     def _accumulate(self, motion, b: ScheduleBuilder, sums: np.ndarray) -> None:
         k0 = math.ceil(b.t * self.f - 1e-9)
@@ -253,7 +275,9 @@ class FlexibleTwoPosition:
         h = motion.heading_at(t) + imu_heading_offset(motion.tilt, b.a, 0.0, self.mounting)
         sums += [np.cos(h).sum(), np.sin(h).sum()]
 
-    def _variable_turn(self, motion, b: ScheduleBuilder, sums: np.ndarray, which: int, direction: float) -> bool:
+    def _variable_turn(
+        self, motion, b: ScheduleBuilder, sums: np.ndarray, which: int, direction: float
+    ) -> bool:
         """Turn until the stop test passes; returns True if the fallback was used."""
         w = self.rate
         per_turn = int(math.ceil(2 * math.pi / w * self.f))
@@ -277,9 +301,16 @@ class FlexibleTwoPosition:
         else:
             fallback = True
             best = np.min(np.abs(expr[:per_turn]) + np.where(sign_ok[:per_turn], 0.0, np.inf))
-            late = np.flatnonzero((np.abs(expr[per_turn:]) <= best + self.delta) & sign_ok[per_turn:])
+            late = np.flatnonzero(
+                (np.abs(expr[per_turn:]) <= best + self.delta) & sign_ok[per_turn:]
+            )
             n = per_turn + (late[0] + 1 if len(late) else per_turn)
-        b.rotate("outer", direction * w * n / self.f, w, "variable turn" + (" (fallback)" if fallback else ""))
+        b.rotate(
+            "outer",
+            direction * w * n / self.f,
+            w,
+            "variable turn" + (" (fallback)" if fallback else ""),
+        )
         return fallback
 
     def plan(self, motion: Motion, duration: float) -> TableSchedule:
@@ -335,7 +366,9 @@ class HeadingIsolation:
 
         def angle_at(t: float, target: float) -> float:
             # Outer angle at time t; branch chosen next to the level-vehicle prediction.
-            a = float(isolation_angle(motion.attitude(np.array([t]))[0], 0.0, self.mounting, target))
+            a = float(
+                isolation_angle(motion.attitude(np.array([t]))[0], 0.0, self.mounting, target)
+            )
             guess = b.a + float(motion.heading_at(t) - motion.heading_at(b.t)) - (target - h)
             return guess + math.remainder(a - guess, 2 * math.pi)
 
@@ -351,7 +384,9 @@ class HeadingIsolation:
             b.isolate(self.stop, h, b.a, angle_at(b.t + self.stop, h), 0.0, f"hold {lab}")
             i += 1
         sched = b.build()
-        sched.meta["isolation_reversals"] = _count_reversals(sched, motion, duration, self.count_rate)
+        sched.meta["isolation_reversals"] = _count_reversals(
+            sched, motion, duration, self.count_rate
+        )
         return sched
 
 
@@ -413,10 +448,14 @@ def build_scheme(name: str, rate: float, stop: float, **options):
         Unknown scheme or bad parameters.
     """
     if name not in SCHEMES:
-        raise InputError("--scheme", f"unknown scheme {name!r}", f"use one of: {', '.join(SCHEMES)}")
+        raise InputError(
+            "--scheme", f"unknown scheme {name!r}", f"use one of: {', '.join(SCHEMES)}"
+        )
     if not (math.isfinite(rate) and rate > 0):
         raise InputError("--rate", f"table rate must be > 0, got {rate!r}")
-    if not (math.isfinite(stop) and stop >= 0) or (stop == 0 and name not in ("continuous", "none")):
+    if not (math.isfinite(stop) and stop >= 0) or (
+        stop == 0 and name not in ("continuous", "none")
+    ):
         raise InputError("--stop", f"stop time must be > 0 s, got {stop!r}")
     mounting = options.pop("mounting", None)
     if name == "none":
@@ -442,7 +481,11 @@ def build_scheme(name: str, rate: float, stop: float, **options):
     else:  # custom
         steps = options.pop("steps", None)
         if not steps:
-            raise InputError("scheme.steps", "a custom scheme needs a table of steps", "add [[scheme.steps]] rows")
+            raise InputError(
+                "scheme.steps",
+                "a custom scheme needs a table of steps",
+                "add [[scheme.steps]] rows",
+            )
         s = TableScheme("custom", tuple(steps), rate, stop)
     if options:
         raise InputError("scheme", f"option(s) {sorted(options)} do not apply to {name}")

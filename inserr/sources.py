@@ -50,7 +50,9 @@ def layout_for(imu: ImuErrors) -> Layout:
     )
 
 
-def constant_sources(imu: ImuErrors, init: InitialErrors, vertical: str = "clamped") -> list[Source]:
+def constant_sources(
+    imu: ImuErrors, init: InitialErrors, vertical: str = "clamped"
+) -> list[Source]:
     """All non-zero constant error sources, in a fixed order."""
     out: list[Source] = []
 
@@ -89,7 +91,12 @@ def unit_column(model: ErrorModel, source: Source, c_sn0: np.ndarray) -> np.ndar
         e = np.zeros(3)
         e[AXES.index(lab)] = 1.0
         x[lay["eps" if group == "gyro_bias" else "nabla"]] = c_sn0 @ e
-    elif group in ("gyro_scale_factor", "accel_scale_factor", "gyro_misalignment", "accel_misalignment"):
+    elif group in (
+        "gyro_scale_factor",
+        "accel_scale_factor",
+        "gyro_misalignment",
+        "accel_misalignment",
+    ):
         k = np.zeros((3, 3))
         if group.endswith("scale_factor"):
             i = AXES.index(lab)

@@ -53,7 +53,9 @@ def _yaxis_parts(b, mounting: np.ndarray | None):
     return p, q, z
 
 
-def imu_heading_offset(c_tilt: np.ndarray, a, b=0.0, mounting: np.ndarray | None = None) -> np.ndarray:
+def imu_heading_offset(
+    c_tilt: np.ndarray, a, b=0.0, mounting: np.ndarray | None = None
+) -> np.ndarray:
     """Heading (rad) of the IMU y axis for a vehicle at heading 0 with attitude ``c_tilt``.
 
     For heading-only vehicle motion ``C_b^n(t) = rot_z(-H(t)) C_tilt``, so the IMU
@@ -217,7 +219,9 @@ class ScheduleBuilder:
     def stop(self, duration: float, label: str = "stop") -> None:
         """Hold both gimbals for ``duration`` s (skipped if zero)."""
         if duration > 0:
-            self._rows.append((self.t, duration, "stop", "", 0.0, self.a, self.b, label, math.nan, 0.0))
+            self._rows.append(
+                (self.t, duration, "stop", "", 0.0, self.a, self.b, label, math.nan, 0.0)
+            )
             self.t += duration
 
     def rotate(self, gimbal: str, angle: float, rate: float, label: str | None = None) -> None:
@@ -250,7 +254,18 @@ class ScheduleBuilder:
         """
         if duration > 0:
             self._rows.append(
-                (self.t, duration, "isolate", "outer", 0.0, a_start, self.b, label, target, target_rate)
+                (
+                    self.t,
+                    duration,
+                    "isolate",
+                    "outer",
+                    0.0,
+                    a_start,
+                    self.b,
+                    label,
+                    target,
+                    target_rate,
+                )
             )
             self.t += duration
             self.a = a_end

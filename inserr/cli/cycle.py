@@ -11,7 +11,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scheme", required=True, help="periodic (open-loop) scheme name")
     p.add_argument("--rate", type=finite_float, default=6.0, help="table rate, deg/s (default 6)")
     p.add_argument("--stop", type=finite_float, default=300.0, help="stop time, s (default 300)")
-    p.add_argument("--reversal", type=finite_float, default=0.0, help="continuous: reversal period, s")
+    p.add_argument(
+        "--reversal", type=finite_float, default=0.0, help="continuous: reversal period, s"
+    )
     add_json_flag(p)
 
 
@@ -38,10 +40,14 @@ def run(args: argparse.Namespace) -> int:
     human = (
         f"{args.scheme}: cycle {c.cycle_time:.3f} s, {c.motor_starts_per_hour:.2f} motor starts/h\n"
         "horizontal block of the cycle integral of C_s^n (s):\n"
-        + format_table(["", "IMU x", "IMU y"], [["E", h[0, 0], h[0, 1]], ["N", h[1, 0], h[1, 1]]], "{:.6g}")
+        + format_table(
+            ["", "IMU x", "IMU y"], [["E", h[0, 0], h[0, 1]], ["N", h[1, 0], h[1, 1]]], "{:.6g}"
+        )
         + f"\nresidual drift fraction: {c.residual_drift_fraction:.3e} of each horizontal bias\n"
         "scale-factor x table-rate integral (rad per unit SF error; rows E,N,U; columns x,y,z):\n"
-        + format_table(["", "x", "y", "z"], [[r, *c.scale_factor[i]] for i, r in enumerate("ENU")], "{:.4g}")
+        + format_table(
+            ["", "x", "y", "z"], [[r, *c.scale_factor[i]] for i, r in enumerate("ENU")], "{:.4g}"
+        )
     )
     emit(args, result, human)
     return 0

@@ -40,5 +40,7 @@ def run(args: argparse.Namespace) -> int:
         + "\n\nlargest error sources (RMS horizontal at the end, nmi)\n"
         + format_table(["source", "nmi"], [[k, v] for k, v in budget])
     )
+    for w in m["warnings"]:
+        human += f"\nwarning: {w}"
     emit(args, m, human)
     return 0

@@ -9,7 +9,6 @@ into the same nested table a scenario file gives, so both are validated by
 from __future__ import annotations
 
 import argparse
-import re
 
 from inserr.errors import InputError
 from inserr.scenario import Scenario, load_scenario, scenario_from_dict
@@ -24,14 +23,38 @@ FLAGS: dict[str, tuple[str, str | None, str]] = {
     "accel-bias": ("imu.accel_bias", "ug", "accelerometer bias, micro-g: one value or x,y,z"),
     "gyro-sf": ("imu.gyro_scale_factor", "ppm", "gyro scale-factor error, ppm: one value or x,y,z"),
     "accel-sf": ("imu.accel_scale_factor", "ppm", "accelerometer scale-factor error, ppm"),
-    "gyro-misalignment": ("imu.gyro_misalignment", "arcsec", "gyro misalignment, arcsec (all six, or xy,xz,yx,yz,zx,zy)"),
-    "accel-misalignment": ("imu.accel_misalignment", "arcsec", "accelerometer misalignment, arcsec"),
+    "gyro-misalignment": (
+        "imu.gyro_misalignment",
+        "arcsec",
+        "gyro misalignment, arcsec (all six, or xy,xz,yx,yz,zx,zy)",
+    ),
+    "accel-misalignment": (
+        "imu.accel_misalignment",
+        "arcsec",
+        "accelerometer misalignment, arcsec",
+    ),
     "arw": ("imu.arw", "deg/sqrt(h)", "angle random walk, deg/sqrt(h)"),
     "vrw": ("imu.vrw", "ug/sqrt(Hz)", "velocity random walk, micro-g/sqrt(Hz)"),
-    "gyro-bias-instability": ("imu.gyro_bias_instability", "deg/h", "Gauss-Markov gyro bias 1 sigma, deg/h"),
-    "accel-bias-instability": ("imu.accel_bias_instability", "ug", "Gauss-Markov accel bias 1 sigma, micro-g"),
-    "correlation-time": ("imu.gyro_correlation_time", "s", "Gauss-Markov correlation time, s (gyro and accel)"),
-    "initial-attitude": ("initial.attitude", "arcsec", "initial attitude error E,N,U (tilts, heading), arcsec"),
+    "gyro-bias-instability": (
+        "imu.gyro_bias_instability",
+        "deg/h",
+        "Gauss-Markov gyro bias 1 sigma, deg/h",
+    ),
+    "accel-bias-instability": (
+        "imu.accel_bias_instability",
+        "ug",
+        "Gauss-Markov accel bias 1 sigma, micro-g",
+    ),
+    "correlation-time": (
+        "imu.gyro_correlation_time",
+        "s",
+        "Gauss-Markov correlation time, s (gyro and accel)",
+    ),
+    "initial-attitude": (
+        "initial.attitude",
+        "arcsec",
+        "initial attitude error E,N,U (tilts, heading), arcsec",
+    ),
     "initial-velocity": ("initial.velocity", "m/s", "initial velocity error, m/s"),
     "initial-position": ("initial.position", "m", "initial position error, m"),
     "heading": ("motion.heading", "deg", "vehicle heading, deg (clockwise from north)"),
@@ -45,7 +68,11 @@ FLAGS: dict[str, tuple[str, str | None, str]] = {
     "delta": ("scheme.delta", None, "flexible scheme: stop threshold (default 0.01)"),
     "variant": ("scheme.variant", None, "flexible scheme: threshold or crossing"),
     "step": ("output.step", "s", "output step of the deterministic run, s (default 1)"),
-    "covariance-step": ("output.covariance_step", "s", "output step of covariance results, s (default 60)"),
+    "covariance-step": (
+        "output.covariance_step",
+        "s",
+        "output step of covariance results, s (default 60)",
+    ),
     "substep": ("output.substep", "s", "sub-step of continuous motion, s (default 1)"),
     "vertical": ("output.vertical", None, "vertical channel: clamped (default) or free"),
 }
@@ -58,8 +85,10 @@ def add_scenario_flags(parser: argparse.ArgumentParser, scenario_file: bool = Tr
     """Add the scenario flags (all optional) and, if asked, a positional scenario file."""
     if scenario_file:
         parser.add_argument("scenario", nargs="?", help="scenario TOML file (flags override it)")
-    for name, (_, unit, help_) in FLAGS.items():
-        parser.add_argument(f"--{name}", dest=name.replace("-", "_"), default=None, metavar="X", help=help_)
+    for name, (_, _, help_) in FLAGS.items():
+        parser.add_argument(
+            f"--{name}", dest=name.replace("-", "_"), default=None, metavar="X", help=help_
+        )
     parser.add_argument(
         f"--{YAW_SWING}",
         dest="yaw_swing",
@@ -70,7 +99,7 @@ def add_scenario_flags(parser: argparse.ArgumentParser, scenario_file: bool = Tr
 
 
 def _with_unit(flag: str, text: str, unit: str | None) -> str:
-    """Append the flag's unit when the value is bare numbers (``"0.02"``, ``"1,2,3"``, ``"nan"``)."""
+    """Append the flag's unit to bare numbers (``"0.02"``, ``"1,2,3"``, ``"nan"``)."""
     text = text.strip()
     if unit is None:
         return text
@@ -104,7 +133,9 @@ def flags_to_dict(args: argparse.Namespace) -> dict:
     if swing is not None:
         parts = swing.split(",")
         if len(parts) != 2:
-            raise InputError("--yaw-swing", f"expected AMP,PERIOD, got {swing!r}", "e.g. --yaw-swing 6,120")
+            raise InputError(
+                "--yaw-swing", f"expected AMP,PERIOD, got {swing!r}", "e.g. --yaw-swing 6,120"
+            )
         m = d.setdefault("motion", {})
         if m.get("type") == "turn":
             raise InputError("--yaw-swing", "cannot be combined with --turn-rate")

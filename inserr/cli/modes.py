@@ -13,10 +13,18 @@ from inserr.model import ErrorModel, modes
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--lat", type=finite_float, required=True, help="latitude, deg")
     p.add_argument("--height", type=finite_float, default=0.0, help="height, m (default 0)")
-    p.add_argument("--earth", choices=("ellipsoid", "spherical"), default="ellipsoid",
-                   help="Earth shape (default WGS84 ellipsoid)")
-    p.add_argument("--vertical", choices=("clamped", "free"), default="clamped",
-                   help="vertical channel (default clamped)")
+    p.add_argument(
+        "--earth",
+        choices=("ellipsoid", "spherical"),
+        default="ellipsoid",
+        help="Earth shape (default WGS84 ellipsoid)",
+    )
+    p.add_argument(
+        "--vertical",
+        choices=("clamped", "free"),
+        default="clamped",
+        help="vertical channel (default clamped)",
+    )
     add_json_flag(p)
 
 
@@ -26,7 +34,9 @@ def run(args: argparse.Namespace) -> int:
     result = {
         "latitude_deg": args.lat,
         "schuler_period_min": m.schuler_period_s / 60.0,
-        "foucault_period_h": m.foucault_period_s / 3600.0 if math.isfinite(m.foucault_period_s) else None,
+        "foucault_period_h": m.foucault_period_s / 3600.0
+        if math.isfinite(m.foucault_period_s)
+        else None,
         "earth_period_h": m.earth_period_s / 3600.0,
         "eigenvalues_per_s": [[float(e.real), float(e.imag)] for e in m.eigenvalues],
         "earth_model": args.earth,
@@ -35,12 +45,20 @@ def run(args: argparse.Namespace) -> int:
     }
     rows = [
         ["Schuler", f"{result['schuler_period_min']:.3f} min"],
-        ["Foucault", "infinite (no split)" if result["foucault_period_h"] is None
-         else f"{result['foucault_period_h']:.3f} h"],
+        [
+            "Foucault",
+            "infinite (no split)"
+            if result["foucault_period_h"] is None
+            else f"{result['foucault_period_h']:.3f} h",
+        ],
         ["Earth (sidereal)", f"{result['earth_period_h']:.4f} h"],
     ]
     if m.vertical_time_constant_s:
         rows.append(["vertical divergence", f"{m.vertical_time_constant_s:.1f} s time constant"])
-    emit(args, result, f"Eigen-periods at latitude {args.lat:g} deg ({args.earth} Earth, g = {site.g:.5f})\n"
-         + format_table(["mode", "period"], rows))
+    emit(
+        args,
+        result,
+        f"Eigen-periods at latitude {args.lat:g} deg ({args.earth} Earth, g = {site.g:.5f})\n"
+        + format_table(["mode", "period"], rows),
+    )
     return 0

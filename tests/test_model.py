@@ -1,0 +1,251 @@
+"""Physics of the psi-angle error model against independent closed forms."""
+
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+from scipy.integrate import quad_vec
+
+from inserr.discretize import Discretizer
+from inserr.earth import OMEGA_IE, Site
+from inserr.model import DR, PSI, ErrorModel, Layout, attitude_error, modes
+from inserr.propagate import propagate_states
+from inserr.timeline import Timeline
+from inserr.units import DEG, DEG_PER_HOUR, MICRO_G, PPM
+
+
+@pytest.mark.parametrize("lat", [0.0, 34.0, 60.0])
+def test_eigen_periods_match_schuler_and_foucault_formulas(lat):
+    # Spherical Earth: the horizontal channels obey z'' + 2i Omega sinL z' + ws^2 z = 0
+    # exactly, whose roots are the Foucault-split pair sqrt(ws^2 + (Omega sinL)^2) +- Omega sinL.
+    site = Site.from_degrees(lat, spherical=True)
+    m = modes(ErrorModel(site))
+    ws = math.sqrt(site.g / site.r_n)
+    ou = OMEGA_IE * math.sin(site.lat)
+    pair = np.sort(m.eigenvalues.imag[m.eigenvalues.imag > 0])[-2:]  # Schuler band, rad/s
+    hi, lo = math.sqrt(ws**2 + ou**2) + ou, math.sqrt(ws**2 + ou**2) - ou
+    # rtol 1e-9: eigvals of a 9x9 real matrix, entries O(g), eigenvalues O(1e-3).
+    assert pair[1] == pytest.approx(hi, rel=1e-9)
+    assert pair[0] == pytest.approx(lo, rel=1e-9)
+    assert m.schuler_period_s == pytest.approx(2 * math.pi * math.sqrt(site.r_n / site.g), rel=1e-9)
+    if lat == 0.0:
+        assert math.isinf(m.foucault_period_s)
+    else:
+        assert m.foucault_period_s == pytest.approx(2 * math.pi / ou, rel=1e-9)
+    assert m.earth_period_s == pytest.approx(2 * math.pi / OMEGA_IE, rel=1e-12)
+
+
+def test_ellipsoid_modes_at_34_deg_meet_issue_figures():
+    # WGS84: east and north Schuler frequencies differ by ~0.2 %, which perturbs the
+    # Foucault split by (dw/2)^2 / (2 ou^2) ~ 6e-4 relative at 34 deg.
+    site = Site.from_degrees(34.0)
+    m = modes(ErrorModel(site))
+    assert 84.4 <= m.schuler_period_s / 60 <= 84.6
+    # Geometric mean of sqrt(g/R_N) and sqrt(g/R_M) up to the anisotropy's effect on the
+    # split, ~(dw/ou)^2 ~ 1e-3 of a ~1e-3 correction.
+    assert m.schuler_period_s == pytest.approx(
+        2 * math.pi * (site.r_m * site.r_n) ** 0.25 / math.sqrt(site.g), rel=1e-5
+    )
+    assert m.foucault_period_s / 3600 == pytest.approx(
+        23.9345 / math.sin(math.radians(34)), rel=2e-3
+    )
+    assert m.earth_period_s / 3600 == pytest.approx(23.9345, abs=1e-3)
+
+
+def test_control_discretization_equals_expm_of_augmented_matrix():
+    model = ErrorModel(
+        Site.from_degrees(34.0), Layout(scale_misalignment=True, bias_instability=True)
+    )
+    w = np.array([0.01, -0.02, 0.1])
+    d = Discretizer(model)
+    phi = d.transition(w, 7.3)
+    n = model.layout.n
+    aug = np.zeros((n + 1, n + 1))
+    aug[:n, :n] = model.matrix(w)
+    ref = sl.expm(aug * 7.3)[:n, :n]
+    # Entries reach O(g dt) ~ 600; both are scaling-and-squaring expm: agree to ~1e-14 relative.
+    tol = 1e-14 * np.abs(ref).max()
+    assert np.allclose(phi, ref, rtol=0, atol=tol)
+    # The batched path used for continuous motion gives the same numbers.
+    batch = d.transitions(np.array([w, -w]), np.array([7.3, 2.0]))
+    assert np.allclose(batch[0], ref, atol=tol)
+    assert np.allclose(batch[1], sl.expm(model.matrix(-w) * 2.0), atol=tol)
+
+
+def test_van_loan_noise_equals_quadrature():
+    model = ErrorModel(
+        Site.from_degrees(34.0),
+        Layout(bias=False, bias_instability=True),
+        gyro_correlation_time=500.0,
+        accel_correlation_time=800.0,
+    )
+    q = model.noise_intensity(1e-5, 1e-4, 1e-6, 1e-4)
+    d = Discretizer(model, q)
+    w = np.array([0.0, 0.0, 0.1])
+    a = model.matrix(w)
+    g = model.noise_input()
+    dt = 30.0
+    ref, _ = quad_vec(
+        lambda s: sl.expm(a * s) @ g @ q @ g.T @ sl.expm(a * s).T,
+        0.0,
+        dt,
+        epsabs=1e-20,
+        epsrel=1e-12,
+    )
+    qd = d.noise(w, dt)
+    # Adaptive quadrature at epsrel 1e-12 vs Van Loan's expm: 1e-12 of the largest entry.
+    assert np.allclose(qd, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+
+
+def _psi_closed_form(site, eps_n, t):
+    """psi(t) for a constant n-frame gyro error: rotation about Omega (Rodrigues)."""
+    om = site.earth_rate_n
+    w = np.linalg.norm(om)
+    u = om / w
+    par = u * (u @ eps_n)
+    perp = eps_n - par
+    return -(par * t + math.sin(w * t) / w * perp - (1 - math.cos(w * t)) / w * np.cross(u, perp))
+
+
+def _static_run(site, layout, x0, t_out, **kw):
+    model = ErrorModel(site, layout, **kw)
+    tl = Timeline.static(np.eye(3), float(t_out[-1]))
+    return propagate_states(Discretizer(model), tl, x0, t_out)
+
+
+def test_psi_obeys_closed_form_for_constant_gyro_bias():
+    # psi' = -Omega x psi - eps is decoupled from velocity and position in the psi model.
+    site = Site.from_degrees(34.0)
+    model = ErrorModel(site)
+    x0 = np.zeros(model.layout.n)
+    eps = np.array([0.01, -0.02, 0.03]) * DEG_PER_HOUR
+    x0[model.layout["eps"]] = eps
+    t = np.array([0.0, 3600.0, 86400.0, 3 * 86400.0])
+    nav = _static_run(site, model.layout, x0, t)
+    for k, tk in enumerate(t):
+        # 1e-7: one expm over a whole day of a matrix with O(g) entries loses ~1e-8 to
+        # scaling-and-squaring roundoff.
+        assert np.allclose(nav[k, PSI], _psi_closed_form(site, eps, tk), rtol=1e-7, atol=1e-15)
+
+
+def test_accelerometer_bias_gives_foucault_modulated_schuler_tilt():
+    # Spherical Earth, constant horizontal accel bias a = nE + i nN: the horizontal error
+    # z = dr_E + i dr_N solves z'' + 2i ou z' + ws^2 z = a, z(0) = z'(0) = 0; psi stays 0.
+    site = Site.from_degrees(34.0, spherical=True)
+    model = ErrorModel(site)
+    nab = np.array([100.0, -50.0, 0.0]) * MICRO_G
+    x0 = np.zeros(model.layout.n)
+    x0[model.layout["nabla"]] = nab
+    t = np.linspace(0, 6 * 3600.0, 7)
+    nav = _static_run(site, model.layout, x0, t)
+    ws2 = site.g / site.r_n
+    ou = OMEGA_IE * math.sin(site.lat)
+    lam = np.array([-ou + math.sqrt(ou**2 + ws2), -ou - math.sqrt(ou**2 + ws2)])
+    a = nab[0] + 1j * nab[1]
+    # Homogeneous coefficients from z(0) = -a/ws^2 (particular part a/ws^2) and z'(0) = 0.
+    coef = np.linalg.solve(
+        np.array([[1, 1], [lam[0], lam[1]]], dtype=complex), np.array([-a / ws2, 0])
+    )
+    z = a / ws2 + coef[0] * np.exp(1j * lam[0] * t) + coef[1] * np.exp(1j * lam[1] * t)
+    assert np.allclose(nav[:, 6] + 1j * nav[:, 7], z, rtol=0, atol=1e-6 * abs(a) / ws2)
+    assert np.allclose(nav[:, PSI], 0.0)
+    # Tilt phi = dtheta: its time average is the classic -nabla/g level error (phi_N = nE/g).
+    tt = np.linspace(0, 2 * math.pi / math.sqrt(ws2), 400, endpoint=False)
+    navf = _static_run(site, model.layout, x0, tt)
+    phi = attitude_error(site, navf)
+    assert phi[:, 1].mean() == pytest.approx(
+        nab[0] / site.g, rel=2e-2
+    )  # 2 %: Foucault turn in one period
+    assert phi[:, 0].mean() == pytest.approx(-nab[1] / site.g, rel=4e-2)
+
+
+def test_longitude_error_grows_with_gyro_drift_along_earth_axis():
+    # Classic static-INS result: the drift component along Earth's axis, eps . Omega_hat,
+    # makes the longitude error grow at that rate; the other components give bounded
+    # (24 h periodic) errors. Measured over one sidereal day to cancel those.
+    site = Site.from_degrees(34.0)
+    model = ErrorModel(site)
+    for eps in (np.array([0, 0.01, 0]), np.array([0, 0, 0.01]), np.array([0.01, 0, 0])):
+        eps = eps * DEG_PER_HOUR
+        x0 = np.zeros(model.layout.n)
+        x0[model.layout["eps"]] = eps
+        day = 2 * math.pi / OMEGA_IE
+        t = np.array([0.0, day, 2 * day])
+        nav = _static_run(site, model.layout, x0, t)
+        dlon = nav[:, 6] / (site.r_n * math.cos(site.lat))
+        slope = (dlon[2] - dlon[1]) / day
+        expected = eps @ site.earth_rate_n / OMEGA_IE
+        # 1e-2 of the largest drift: quasi-static Schuler tracking is exact to (Omega/ws)^2 ~ 3e-3
+        # and the Schuler transient is bounded.
+        assert slope == pytest.approx(expected, abs=1e-2 * 0.01 * DEG_PER_HOUR)
+
+
+def test_up_gyro_bias_gives_heading_drift():
+    site = Site.from_degrees(34.0)
+    model = ErrorModel(site)
+    x0 = np.zeros(model.layout.n)
+    eps_u = 0.02 * DEG_PER_HOUR
+    x0[model.layout["eps"]] = [0, 0, eps_u]
+    t = np.array([0.0, 300.0, 600.0])
+    phi = attitude_error(site, _static_run(site, model.layout, x0, t))
+    # phi_U = -eps_U t up to (Omega t)^2 / 6 ~ 3e-4 relative at 10 min.
+    assert phi[1:, 2] == pytest.approx(-eps_u * t[1:], rel=1e-3)
+
+
+def test_scale_factor_times_table_rate_grows_heading_error():
+    # A level IMU turning at w about up with z-gyro scale-factor error dK: the gyro
+    # over-reads the total up rate (w + Omega sinL) by dK, so phi_U' = -dK (w + Omega sinL).
+    site = Site.from_degrees(34.0)
+    model = ErrorModel(site, Layout(scale_misalignment=True))
+    dk = 50 * PPM
+    w = 6 * DEG
+    x0 = np.zeros(model.layout.n)
+    k = np.diag([0.0, 0.0, dk])
+    x0[model.layout["kg"]] = k.reshape(-1)  # invariant under rotation about z
+    tl = Timeline(
+        np.array([0.0, 60.0, 120.0]), np.stack([np.eye(3)] * 3), np.array([[0, 0, w], [0, 0, w]])
+    )
+    t = np.array([0.0, 30.0, 120.0])
+    phi = attitude_error(site, propagate_states(Discretizer(model), tl, x0, t))
+    rate = -dk * (w + OMEGA_IE * math.sin(site.lat))
+    # psi_U leaks into psi_E at Omega cos L and back: a relative (Omega cos L t)^2 / 6
+    # = 9e-6 at 2 min; 2e-5 bounds it.
+    assert phi[1:, 2] == pytest.approx(rate * t[1:], rel=2e-5)
+
+
+def test_imu_frame_model_has_textbook_input_matrix():
+    site = Site.from_degrees(34.0)
+    model = ErrorModel(site)
+    c = Timeline.static(np.eye(3), 1.0).c_sn[0]
+    rng = np.random.default_rng(3)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    c = q * np.sign(np.linalg.det(q))
+    sys = model.state_space_imu(c)
+    lay = model.layout
+    assert np.allclose(sys.A[PSI, lay["eps"]], -c)
+    # The vertical velocity row is clamped (aided vertical channel) by default.
+    assert np.allclose(sys.A[3:5, lay["nabla"]], c[:2])
+    assert np.allclose(sys.A[5, :], 0.0)
+    assert np.allclose(sys.A[lay["eps"], :], 0.0)
+
+
+def test_free_vertical_channel_diverges_with_sqrt_2g_over_r():
+    site = Site.from_degrees(34.0)
+    m = modes(ErrorModel(site, vertical="free"))
+    # Coriolis couples dv_U and dv_E (2 Omega cos L), shifting s^2 = 2g/R by (2 Omega cos L)^2:
+    # a relative (2 Omega cos L)^2 / (4 g / R) = 2.4e-3 change of the time constant.
+    assert m.vertical_time_constant_s == pytest.approx(
+        math.sqrt(site.mean_radius / (2 * site.g)), rel=3e-3
+    )
+
+
+def test_position_error_initial_condition_keeps_phi():
+    # An initial position error alone is not an attitude error: phi(0) = 0.
+    site = Site.from_degrees(34.0)
+    from inserr.sources import Source, unit_column
+
+    model = ErrorModel(site)
+    x = unit_column(model, Source("initial_position_e", "initial_position", 10.0), np.eye(3)) * 10.0
+    assert np.allclose(attitude_error(site, x[:9]), 0.0, atol=1e-18)
+    assert x[DR][0] == 10.0
