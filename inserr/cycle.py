@@ -84,10 +84,11 @@ class CycleIntegrals:
     Notes
     -----
     A zero cycle integral is necessary but not sufficient. With gyro forcing
-    ``u = dU/dt`` periodic, ``chi = psi + U`` obeys ``chi' = -Omega x chi + Omega x U(t)``:
-    the cycle mean of the accumulated error acts through the Earth rate as a constant
-    gyro drift ``Omega x mean(U)`` (:meth:`equivalent_drift`). That is why two
-    schemes with the same (zero) cycle integral can drift very differently.
+    ``u = dU/dt``, ``chi = psi + U`` obeys ``chi' = -Omega x chi + Omega x U(t)``: the
+    cycle mean of ``U`` is an attitude offset acting as the drift ``Omega x mean(U)``
+    (:meth:`equivalent_drift`; perpendicular to Omega, so its effect is bounded),
+    and the periodic rest of ``U`` forces the Schuler loop at the cycle frequency
+    (see ``docs/theory.md``, resonance).
     """
 
     cycle_time: float

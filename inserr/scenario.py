@@ -284,6 +284,7 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
         raise InputError(f"imu.{exc.field}", exc.problem, exc.fix) from None
     init = InitialErrors(ini["attitude"], ini["velocity"], ini["position"])
     motion = _motion(mo, base_dir)
+    motion.pieces(duration)  # a heading history shorter than the run fails here, early
     if sh["rate"] <= 0:
         raise InputError("scheme.rate", "table rate must be > 0", "give e.g. 6 deg/s")
     if sh["stop"] < 0:

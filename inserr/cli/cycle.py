@@ -36,6 +36,9 @@ def run(args: argparse.Namespace) -> int:
         "full_cycle_integral_s": c.full.tolist(),
         "scale_factor_rate_integral_rad": c.scale_factor.tolist(),
         "misalignment_rate_integral_rad": c.misalignment.tolist(),
+        "mean_excursion_s": c.mean_excursion.tolist(),
+        "mean_excursion_scale_factor_rad": c.mean_excursion_scale_factor.tolist(),
+        "mean_excursion_misalignment_rad": c.mean_excursion_misalignment.tolist(),
     }
     human = (
         f"{args.scheme}: cycle {c.cycle_time:.3f} s, {c.motor_starts_per_hour:.2f} motor starts/h\n"

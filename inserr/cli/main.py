@@ -36,13 +36,20 @@ def _available() -> dict[str, tuple[str, str]]:
     return {k: v for k, v in COMMANDS.items() if importlib.util.find_spec(v[0]) is not None}
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line error (no usage dump): ``inserr <cmd>: error: ...``."""
+
+    def error(self, message: str):  # noqa: D102 - argparse API
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The argument parser; sub-command arguments are added only for ``command``."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="inserr",
         description="Error analysis of rotation-modulated strapdown inertial navigation.",
     )
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name, (module, help_) in _available().items():
         p = sub.add_parser(name, help=help_, description=help_)
         if name == command:
