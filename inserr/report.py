@@ -46,7 +46,7 @@ def to_jsonable(obj: Any) -> Any:
 
 def dumps(obj: Any) -> str:
     """Strict JSON text of ``obj`` (numpy-aware), indented."""
-    return json.dumps(to_jsonable(obj), indent=2, allow_nan=False)
+    return json.dumps(to_jsonable(obj), indent=2, allow_nan=False, ensure_ascii=False)
 
 
 @dataclass
