@@ -20,6 +20,9 @@ angular velocity ``w`` (IMU relative to n, resolved in n) and its duration, so
 
 from __future__ import annotations
 
+import threading
+from functools import lru_cache
+
 import numpy as np
 
 from inserr.model import ErrorModel
@@ -64,6 +67,8 @@ class Discretizer:
         self._phi: dict[tuple, np.ndarray] = {}
         self._qd: dict[tuple, np.ndarray] = {}
         self._nav_nodes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        # Shared across threads (discretizer_for): one lock guards the caches.
+        self._lock = threading.RLock()
         self.n_control_calls = 0
 
     def key(self, omega_n: np.ndarray, dt: float) -> tuple:
@@ -80,6 +85,10 @@ class Discretizer:
 
     def transition(self, omega_n: np.ndarray, dt: float) -> np.ndarray:
         """``Phi = expm(A(w) dt)`` via ``control.sample_system`` (ZOH), cached."""
+        with self._lock:
+            return self._transition(omega_n, dt)
+
+    def _transition(self, omega_n: np.ndarray, dt: float) -> np.ndarray:
         key = self.key(omega_n, dt)
         phi = self._phi.get(key)
         if phi is None:
@@ -96,6 +105,10 @@ class Discretizer:
 
     def noise(self, omega_n: np.ndarray, dt: float) -> np.ndarray:
         """Discrete process-noise covariance ``Qd(w, dt)`` by Van Loan, cached."""
+        with self._lock:
+            return self._noise(omega_n, dt)
+
+    def _noise(self, omega_n: np.ndarray, dt: float) -> np.ndarray:
         if self.q is None:
             raise ValueError("Discretizer was built without a noise intensity")
         key = self.key(omega_n, dt)
@@ -121,6 +134,10 @@ class Discretizer:
         short sub-steps) go through :meth:`_structured`, which evaluates the same
         matrix exponential from its block structure, vectorised.
         """
+        with self._lock:
+            return self._transitions(omegas, dts)
+
+    def _transitions(self, omegas: np.ndarray, dts: np.ndarray) -> list[np.ndarray]:
         omegas = np.asarray(omegas, dtype=float).reshape(-1, 3)
         dts = np.asarray(dts, dtype=float).reshape(-1)
         keys = [self.key(w, h) for w, h in zip(omegas, dts, strict=True)]
@@ -195,3 +212,18 @@ class Discretizer:
     def cache_size(self) -> int:
         """Number of distinct transition matrices computed so far."""
         return len(self._phi)
+
+
+@lru_cache(maxsize=16)
+def _shared(model: ErrorModel, q_bytes: bytes | None) -> Discretizer:
+    q = None if q_bytes is None else np.frombuffer(q_bytes).reshape(12, 12).copy()
+    return Discretizer(model, q)
+
+
+def discretizer_for(model: ErrorModel, q: np.ndarray | None = None) -> Discretizer:
+    """A process-wide shared :class:`Discretizer` for ``model`` (and noise intensity ``q``).
+
+    Discretizations depend only on constants, so runs of the same model in one
+    process (scheme comparisons, sweeps, repeated analyses) reuse them.
+    """
+    return _shared(model, None if q is None else np.ascontiguousarray(q, dtype=float).tobytes())

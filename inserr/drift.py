@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from inserr.discretize import Discretizer
+from inserr.discretize import discretizer_for
 from inserr.earth import Site
 from inserr.imu import ImuErrors, InitialErrors
 from inserr.model import DR, ErrorModel, Layout, attitude_error
@@ -145,7 +145,7 @@ def analyze_drift(
         layout_for(imu.without_noise()),
         vertical=vertical,
     )
-    disc = Discretizer(model)
+    disc = discretizer_for(model)
     c0 = timeline.c_sn[0]
     sources = constant_sources(imu, init, vertical)
     cols = source_matrix(model, sources, c0)
@@ -180,7 +180,7 @@ def analyze_drift(
             gyro_correlation_time=imu.gyro_correlation_time,
             accel_correlation_time=imu.accel_correlation_time,
         )
-        ndisc = Discretizer(nmodel, nmodel.noise_intensity(arw, vrw, gbi, abi))
+        ndisc = discretizer_for(nmodel, nmodel.noise_intensity(arw, vrw, gbi, abi))
         p0 = np.zeros((nmodel.layout.n,) * 2)
         if nmodel.layout.bias_instability:
             p0[nmodel.layout["bg"], nmodel.layout["bg"]] = gbi**2 * np.eye(3)

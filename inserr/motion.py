@@ -77,6 +77,11 @@ class Motion:
         """Breakpoints in [0, duration] and whether the rate is constant between them."""
         return np.array([0.0, duration]), True
 
+    @property
+    def is_static(self) -> bool:
+        """True if the heading never changes."""
+        return True
+
     def describe(self) -> str:
         """One-line human description."""
         return (
@@ -122,6 +127,10 @@ class YawSwing(Motion):
     def pieces(self, duration):
         return np.array([0.0, duration]), self.amplitude == 0.0
 
+    @property
+    def is_static(self) -> bool:
+        return self.amplitude == 0.0
+
     def describe(self):
         return (
             f"yaw swing {math.degrees(self.amplitude):g} deg/s peak, period {self.period:g} s "
@@ -149,6 +158,10 @@ class Turn(Motion):
 
     def heading_rate(self, t):
         return np.full(np.shape(t), self.rate, dtype=float)
+
+    @property
+    def is_static(self) -> bool:
+        return self.rate == 0.0
 
     def describe(self):
         return (
@@ -194,6 +207,10 @@ class HeadingHistory(Motion):
         t = np.asarray(t, dtype=float)
         k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2)
         return np.diff(self.headings)[k] / np.diff(self.times)[k]
+
+    @property
+    def is_static(self) -> bool:
+        return bool(np.all(self.headings == self.headings[0]))
 
     def pieces(self, duration):
         if duration > self.times[-1] + 1e-9:

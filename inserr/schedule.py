@@ -61,8 +61,9 @@ def build_timeline(
         if b - a <= 1e-9:
             continue
         kind = table.kind[k]
-        w_nb = motion.rate_n(np.array([a]))[0]
-        moving = np.any(motion.heading_rate(np.array([a, 0.5 * (a + b)])) != 0)
+        w_nb = motion.rate_n(np.array([0.5 * (a + b)]))[0]
+        # A constant-rate piece of a heading history may be still even if the motion is not.
+        moving = not motion.is_static and (not m_const or np.any(w_nb != 0))
         exact = False
         w = np.zeros(3)
         if kind == "stop":
