@@ -34,8 +34,6 @@ OMEGA_QUANTUM = 1e-13
 DT_QUANTUM = 1e-9
 #: Most transition matrices kept in the cache.
 MAX_CACHE = 8192
-#: Up to this many cache misses per batch go through python-control one by one.
-FEW = 8
 #: Largest rotation per step (rad) for the structured (quadrature) path.
 MAX_TURN_PER_STEP = 0.5
 
@@ -84,13 +82,18 @@ class Discretizer:
         return np.array(key[:3], dtype=float) * OMEGA_QUANTUM, key[3] * DT_QUANTUM
 
     def transition(self, omega_n: np.ndarray, dt: float) -> np.ndarray:
-        """``Phi = expm(A(w) dt)`` via ``control.sample_system`` (ZOH), cached."""
+        """``Phi = expm(A(w) dt)``, cached: python-control ``sample_system`` (ZOH) for stops
+        and long turns, the structured evaluation for short turning sub-steps."""
         with self._lock:
             return self._transition(omega_n, dt)
 
     def _transition(self, omega_n: np.ndarray, dt: float) -> np.ndarray:
         key = self.key(omega_n, dt)
         phi = self._phi.get(key)
+        if phi is None and self._use_structured(key):
+            w, h = self._unkey(key)
+            phi = self._structured(w[None, :], h)[0]
+            self._store(key, phi)
         if phi is None:
             import control
 
@@ -129,10 +132,10 @@ class Discretizer:
     def transitions(self, omegas: np.ndarray, dts: np.ndarray) -> list[np.ndarray]:
         """``Phi`` for many segments at once, as a list of (n, n) arrays.
 
-        Cache hits are served from the cache. A handful of misses go through
-        python-control (:meth:`transition`); many misses (continuous motion cut into
-        short sub-steps) go through :meth:`_structured`, which evaluates the same
-        matrix exponential from its block structure, vectorised.
+        Cache hits are served from the cache. Stops and long turns (the segments of
+        an indexing scheme) go through python-control (:meth:`transition`); short
+        turning sub-steps (continuous motion) through :meth:`_structured`, which
+        evaluates the same matrix exponential from its block structure, vectorised.
         """
         with self._lock:
             return self._transitions(omegas, dts)
@@ -146,25 +149,28 @@ class Discretizer:
             if k in self._phi:
                 self._phi[k] = self._phi.pop(k)
         missing = sorted({k for k in keys if k not in self._phi})
-        if len(missing) <= FEW or not self.model.layout.rotating:
-            for k in missing:
-                self.transition(*self._unkey(k))
-        else:
-            by_dt: dict[int, list[tuple]] = {}
-            for k in missing:
+        # The path is a function of the key alone, never of the batch or of what the
+        # cache happens to hold, so every run gives bit-identical numbers.
+        by_dt: dict[int, list[tuple]] = {}
+        for k in missing:
+            if self._use_structured(k):
                 by_dt.setdefault(k[3], []).append(k)
-            for group in by_dt.values():
-                w = np.array([self._unkey(k)[0] for k in group])
-                h = self._unkey(group[0])[1]
-                ok = np.linalg.norm(w, axis=1) * h <= MAX_TURN_PER_STEP
-                for i in range(0, int(ok.sum()), 1024):
-                    sel = [k for k, good in zip(group, ok, strict=True) if good][i : i + 1024]
-                    for k, phi in zip(sel, self._structured(w[ok][i : i + 1024], h), strict=True):
-                        self._store(k, phi)
-                for k, good in zip(group, ok, strict=True):
-                    if not good:
-                        self.transition(*self._unkey(k))
-        return [self._phi[k] if k in self._phi else self.transition(*self._unkey(k)) for k in keys]
+            else:
+                self._transition(*self._unkey(k))
+        for group in by_dt.values():
+            h = self._unkey(group[0])[1]
+            for i in range(0, len(group), 1024):
+                chunk = group[i : i + 1024]
+                w = np.array([self._unkey(k)[0] for k in chunk])
+                for k, phi in zip(chunk, self._structured(w, h), strict=True):
+                    self._store(k, phi)
+        return [self._phi[k] if k in self._phi else self._transition(*self._unkey(k)) for k in keys]
+
+    def _use_structured(self, key: tuple) -> bool:
+        """Short turning sub-steps take the structured path; stops and long turns python-control."""
+        w, h = self._unkey(key)
+        turn = float(np.linalg.norm(w)) * h
+        return self.model.layout.rotating and 0.0 < turn <= MAX_TURN_PER_STEP
 
     def _structured(self, omegas: np.ndarray, h: float) -> np.ndarray:
         """``expm(A(w) h)`` for many ``w`` from the block structure of A (vectorised).

@@ -30,7 +30,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
-def _available() -> dict[str, tuple[str, str]]:
+def available_commands() -> dict[str, tuple[str, str]]:
+    """The registered commands whose modules are installed: name -> (module, help)."""
     import importlib.util
 
     return {k: v for k, v in COMMANDS.items() if importlib.util.find_spec(v[0]) is not None}
@@ -50,7 +51,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         description="Error analysis of rotation-modulated strapdown inertial navigation.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for name, (module, help_) in _available().items():
+    for name, (module, help_) in available_commands().items():
         p = sub.add_parser(name, help=help_, description=help_)
         if name == command:
             importlib.import_module(module).add_arguments(p)

@@ -1,0 +1,119 @@
+"""``inserr sweep``: a Cartesian grid of scenario values, one drift analysis per point, on Dask.
+
+The base scenario is a scenario file and/or the flags of ``inserr drift``;
+``--param NAME=V1,V2,...`` (repeatable) names a flag (``stop``, ``gyro-bias``) or a
+dotted scenario key (``scheme.stop``). The value syntax is in :mod:`inserr.sweep`.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from inserr.cli.common import add_json_flag, emit, format_table, positive_int
+from inserr.cli.flags import add_scenario_flags, scenario_from_args
+
+#: Columns of the terminal table after the parameters (all are in results.csv).
+SHOWN = (
+    ("max_horizontal_error_nmi", "max horiz (nmi)"),
+    ("rms_horizontal_error_nmi", "RMS unknown signs (nmi)"),
+    ("worst_case_horizontal_error_nmi", "worst signs (nmi)"),
+    ("motor_starts_per_hour", "motor starts/h"),
+)
+#: Above this many points the terminal shows the best points only.
+MAX_ROWS = 40
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_scenario_flags(p)
+    p.add_argument(
+        "--param",
+        action="append",
+        required=True,
+        metavar="NAME=V1,V2,...",
+        help="a swept parameter (repeat for a grid): a flag name of inserr drift (bare numbers "
+        "take its unit: stop=60,300) or a dotted scenario key (values with units: "
+        "'scheme.stop=60 s,5 min'); x,y,z or AMP,PERIOD values in brackets: "
+        "gyro-bias=[0.01,0.02,0.03],0.02",
+    )
+    p.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="dask.distributed scheduler to submit to (tcp://HOST:PORT), or a local Dask "
+        "scheduler: processes (default), threads, sync",
+    )
+    p.add_argument(
+        "--workers",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="local worker processes (default: the CPUs available)",
+    )
+    p.add_argument(
+        "--out",
+        default=None,
+        metavar="DIR",
+        help="output directory; rerunning with the same DIR skips finished points "
+        "(default sweep-<scenario name>)",
+    )
+    p.add_argument("--no-plots", action="store_true", help="do not draw the summary plots")
+    add_json_flag(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from inserr.sweep import build_grid
+    from inserr.sweep_run import open_engine, run_sweep
+
+    base = scenario_from_args(args)
+    grid = build_grid(base, args.param)
+    # Connect (or fail) before the output directory exists.
+    engine = open_engine(args.scheduler, args.workers)
+    out = args.out or f"sweep-{base.name}"
+    res = run_sweep(grid, out, scheduler=engine, plots=not args.no_plots)
+    rows = [dict(zip(res.header, r, strict=True)) for r in res.rows]
+    result = {
+        "out": str(res.out_dir),
+        "results_csv": str(res.results_csv),
+        "engine": res.engine,
+        "points": len(res.rows),
+        "computed": res.computed,
+        "resumed": res.resumed,
+        "counts": res.counts,
+        "plots": [str(p) for p in res.plots],
+        "rows": rows,
+    }
+    emit(args, result, _human(grid, res, rows))
+    # Failed points (unlike invalid combinations) may succeed on a rerun: tell scripts.
+    return 1 if res.counts.get("failed", 0) else 0
+
+
+def _human(grid, res, rows: list[dict]) -> str:
+    names = [p.name for p in grid.params]
+    shown = [(k, h) for k, h in SHOWN if k in res.header]
+    ranked, note = rows, ""
+    if len(rows) > MAX_ROWS and shown:
+        key, label = shown[0]
+        ok = [r for r in rows if r["status"] == "ok"]
+        ranked = sorted(ok, key=lambda r: r[key])[:MAX_ROWS]
+        note = f" (best {len(ranked)} of {len(rows)} by {label}; all in results.csv)"
+    table = format_table(
+        names + ["status"] + [h for _, h in shown],
+        [[r[n] for n in names] + [r["status"]] + [r.get(k, "") for k, _ in shown] for r in ranked],
+    )
+    dims = " x ".join(f"{p.name} ({len(p.values)})" for p in grid.params)
+    counts = ", ".join(f"{n} {s}" for s, n in sorted(res.counts.items()))
+    lines = [
+        f"sweep of {dims} = {len(rows)} points{note}",
+        table,
+        "",
+        f"{counts}; {res.computed} computed now, {res.resumed} already done ({res.engine})",
+        f"results: {res.results_csv}",
+    ]
+    failed = [r for r in rows if r["status"] not in ("ok", "pending")]
+    for r in failed[:5]:
+        lines.append(
+            f"  point {r['point']} ({', '.join(f'{n}={r[n]}' for n in names)}): {r['error']}"
+        )
+    if len(failed) > 5:
+        lines.append(f"  ... {len(failed) - 5} more failed points in results.csv")
+    return "\n".join(lines)
