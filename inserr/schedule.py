@@ -57,11 +57,14 @@ def build_timeline(
         0,
         len(table) - 1,
     )
-    for (a, b), k in zip(zip(breaks[:-1], breaks[1:], strict=True), seg, strict=True):
+    # Vehicle rate at each piece's middle and attitude at its start, for all pieces at once.
+    w_nb_all = motion.rate_n(0.5 * (breaks[:-1] + breaks[1:]))
+    c_bn_all = motion.attitude(breaks[:-1])
+    pieces = zip(breaks[:-1], breaks[1:], seg, w_nb_all, c_bn_all, strict=True)
+    for a, b, k, w_nb, c_bn in pieces:
         if b - a <= 1e-9:
             continue
         kind = table.kind[k]
-        w_nb = motion.rate_n(np.array([0.5 * (a + b)]))[0]
         # A constant-rate piece of a heading history may be still even if the motion is not.
         moving = not motion.is_static and (not m_const or np.any(w_nb != 0))
         exact = False
@@ -71,7 +74,7 @@ def build_timeline(
             w = w_nb
         elif kind == "rotate":
             axis_b = gimbal_axis_b(table.gimbal[k], float(table.a0[k]))
-            w_bs_n = motion.attitude(np.array([a]))[0] @ axis_b * table.rate[k]
+            w_bs_n = c_bn @ axis_b * table.rate[k]
             if not moving:
                 exact = True
                 w = w_bs_n
