@@ -153,6 +153,21 @@ class Report:
         out.append("</body></html>")
         return "\n".join(out)
 
+    def write_into(self, out_dir: str | os.PathLike, markdown_name: str = "report.md") -> Path:
+        """Write the report's files into ``out_dir`` one by one, each atomically.
+
+        Unlike :meth:`write`, other files already in the directory are left alone
+        (an analysis directory that several scripts write into).
+        """
+        target = Path(out_dir).resolve()
+        for b in self.blocks:
+            if b.kind == "figure":
+                name, _, png = b.payload
+                write_bytes_atomic(target / f"{name}.png", png)
+        write_text_atomic(target / "results.json", dumps(self.results))
+        write_text_atomic(target / markdown_name, self.markdown())
+        return target
+
     def write(self, out_dir: str | os.PathLike, markdown_name: str = "report.md") -> Path:
         """Write the complete report directory atomically and return its path.
 
@@ -190,17 +205,25 @@ def replace_dir(src: Path, target: Path) -> None:
         os.replace(src, target)
 
 
-def write_text_atomic(path: str | os.PathLike, text: str) -> None:
-    """Write a text file atomically (temporary file in the same directory, then rename)."""
+def write_bytes_atomic(path: str | os.PathLike, data: bytes) -> None:
+    """Write a file atomically (temporary file in the same directory, then rename).
+
+    The file ends up world-readable (0644), like any other output.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
         os.chmod(tmp, 0o644)  # mkstemp makes it private; results are meant to be read
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def write_text_atomic(path: str | os.PathLike, text: str) -> None:
+    """Write a UTF-8 text file atomically (see :func:`write_bytes_atomic`)."""
+    write_bytes_atomic(path, text.encode("utf-8"))

@@ -10,7 +10,7 @@ from inserr.earth import Site
 from inserr.report import Report
 from inserr.scenario import Scenario
 from inserr.timeline import Timeline
-from inserr.units import DEG, HOUR, MICRO_G, NMI
+from inserr.units import ARCSEC, DEG, HOUR, MICRO_G, NMI, PPM
 
 
 @dataclass
@@ -87,12 +87,23 @@ def describe(scen: Scenario) -> list[tuple[str, str]]:
         ("gyro bias (x,y,z)", ", ".join(f"{v / (DEG / HOUR):g}" for v in imu.gyro_bias) + " deg/h"),
         ("accel bias (x,y,z)", ", ".join(f"{v / MICRO_G:g}" for v in imu.accel_bias) + " ug"),
         (
-            "gyro / accel scale factor",
-            f"{imu.gyro_scale_factor * 1e6} / {imu.accel_scale_factor * 1e6} ppm",
+            "gyro / accel scale factor (x,y,z)",
+            f"{_axes(imu.gyro_scale_factor / PPM)} / {_axes(imu.accel_scale_factor / PPM)} ppm",
+        ),
+        (
+            "gyro / accel misalignment (xy,xz,yx,yz,zx,zy)",
+            f"{_axes(imu.gyro_misalignment / ARCSEC)} / "
+            f"{_axes(imu.accel_misalignment / ARCSEC)} arcsec",
         ),
         ("ARW / VRW", f"{imu.arw / (DEG / 60):g} deg/sqrt(h) / {imu.vrw / MICRO_G:g} ug/sqrt(Hz)"),
         ("vertical channel", scen.vertical),
     ]
+
+
+def _axes(values) -> str:
+    """Per-axis values as text, one number when they are all equal."""
+    v = [float(x) for x in values]
+    return f"{v[0]:g}" if all(x == v[0] for x in v) else ", ".join(f"{x:g}" for x in v)
 
 
 def metrics_table(runs: list[SchemeRun]) -> tuple[list[str], list[list]]:

@@ -20,8 +20,6 @@ from __future__ import annotations
 import io
 import itertools
 import math
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +30,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm, Normalize  # noqa: E402
 
+from inserr.report import write_bytes_atomic  # noqa: E402
 from inserr.sweep import Grid, Param  # noqa: E402
 
 LINE_METRICS = (
@@ -205,17 +204,6 @@ def write_figures(
         fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
         plt.close(fig)
         path = Path(out_dir) / f"{stem}.png"
-        _write_bytes_atomic(path, buf.getvalue())
+        write_bytes_atomic(path, buf.getvalue())
         paths.append(path)
     return paths
-
-
-def _write_bytes_atomic(path: Path, data: bytes) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
