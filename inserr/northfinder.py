@@ -266,8 +266,9 @@ class SensorGrade:
 
     def without_noise(self) -> SensorGrade:
         """The same constant biases with no random errors (for noise-free checks)."""
-        return replace(self, gyro_arw=0.0, gyro_bias_instability=0.0, accel_vrw=0.0,
-                       accel_bias_instability=0.0)
+        return replace(
+            self, gyro_arw=0.0, gyro_bias_instability=0.0, accel_vrw=0.0, accel_bias_instability=0.0
+        )
 
     def replace(self, **changes) -> SensorGrade:
         """A copy with some fields changed."""

@@ -170,12 +170,16 @@ def crlb(
     times, info_c = coefficient_information(instrument, grade, duration)
     if bias_instability:
         w = instrument.table_rate
-        inflate_g = 1.0 + bias_instability_psd(
-            grade.gyro_bias_instability, grade.gyro_correlation_time, w
-        ) / grade.gyro_arw**2
-        inflate_a = 1.0 + bias_instability_psd(
-            grade.accel_bias_instability, grade.accel_correlation_time, w
-        ) / grade.accel_vrw**2
+        inflate_g = (
+            1.0
+            + bias_instability_psd(grade.gyro_bias_instability, grade.gyro_correlation_time, w)
+            / grade.gyro_arw**2
+        )
+        inflate_a = (
+            1.0
+            + bias_instability_psd(grade.accel_bias_instability, grade.accel_correlation_time, w)
+            / grade.accel_vrw**2
+        )
         per_state = [inflate_g, inflate_g, inflate_a, inflate_a, inflate_g, inflate_a]
         scale = np.sqrt(np.array(per_state))
         info_c = info_c / (scale[:, None] * scale[None, :])
@@ -199,4 +203,3 @@ def crlb(
         covariance=cov,
         parameters=names,
     )
-

@@ -71,9 +71,10 @@ def test_simulation_matches_closed_form_sinusoids():
     data = simulate(pose, ins, GRADE.without_noise(), 40.0)
     wn, wu, g = OMEGA * math.cos(lat), OMEGA * math.sin(lat), earth.gravity(lat)
     a_coef = math.cos(p) * math.cos(h) * wn + math.sin(p) * wu
-    b_coef = math.cos(p) * math.sin(r) * wu - (
-        math.sin(p) * math.sin(r) * math.cos(h) - math.cos(r) * math.sin(h)
-    ) * wn
+    b_coef = (
+        math.cos(p) * math.sin(r) * wu
+        - (math.sin(p) * math.sin(r) * math.cos(h) - math.cos(r) * math.sin(h)) * wn
+    )
     # Body z in ENU: rolled right by r, then nose up by p (tips z back), turned by -h.
     z_n = np.array(
         [
@@ -108,8 +109,11 @@ def test_white_noise_and_gauss_markov_statistics():
     """Increment noise has variance ARW^2 h; the bias instability is stationary GM."""
     ins = Instrument(sample_rate=100.0)
     grade = SensorGrade(
-        gyro_arw=1e-4, gyro_bias=0.0, gyro_bias_instability=0.0,
-        accel_vrw=0.0, accel_bias=0.0,
+        gyro_arw=1e-4,
+        gyro_bias=0.0,
+        gyro_bias_instability=0.0,
+        accel_vrw=0.0,
+        accel_bias=0.0,
     )
     pose = Pose(0.5, 0.0)
     clean = simulate(pose, ins, grade.without_noise(), 1000.0)
@@ -118,8 +122,12 @@ def test_white_noise_and_gauss_markov_statistics():
     # 1e5 samples: the std estimate has 0.22 % relative spread; 2 % is > 9 sigma.
     assert abs(e.std() / 1e-4 - 1) < 0.02
     gm = SensorGrade(
-        gyro_arw=0.0, gyro_bias=0.0, gyro_bias_instability=2e-6,
-        gyro_correlation_time=2.0, accel_vrw=0.0, accel_bias=0.0,
+        gyro_arw=0.0,
+        gyro_bias=0.0,
+        gyro_bias_instability=2e-6,
+        gyro_correlation_time=2.0,
+        accel_vrw=0.0,
+        accel_bias=0.0,
     )
     b = (simulate(pose, ins, gm, 1000.0, seed=4).gyro - clean.gyro)[0] / noisy.sample_interval
     # 500 correlation times: variance estimate spread ~ sqrt(2 tau / T) = 6 %; allow 25 %.
@@ -272,8 +280,9 @@ def test_latitude_observability_is_lost_at_the_equator():
     Heading stays observable there (its bound grows only toward the poles, 1/cos L).
     """
     lats = np.array([0.5, 2.0, 10.0, 45.0])
-    sig = np.array([crlb(Pose.from_degrees(x, 10.0), Instrument(), GRADE, 180.0).lat[-1]
-                    for x in lats])
+    sig = np.array(
+        [crlb(Pose.from_degrees(x, 10.0), Instrument(), GRADE, 180.0).lat[-1] for x in lats]
+    )
     slope = np.diff(np.log(sig)) / np.diff(np.log(np.sin(np.radians(lats))))
     np.testing.assert_allclose(slope, -1.0, atol=1e-3)
     at_equator = crlb(Pose.from_degrees(0.0, 10.0), Instrument(), GRADE, 180.0)
@@ -281,8 +290,9 @@ def test_latitude_observability_is_lost_at_the_equator():
     assert np.isfinite(at_equator.heading[-1])
     near_pole = crlb(Pose.from_degrees(89.0, 10.0), Instrument(), GRADE, 180.0).heading[-1]
     at_45 = crlb(Pose.from_degrees(45.0, 10.0), Instrument(), GRADE, 180.0).heading[-1]
-    assert near_pole / at_45 == pytest.approx(math.cos(math.radians(45)) / math.cos(
-        math.radians(89)), rel=1e-3)
+    assert near_pole / at_45 == pytest.approx(
+        math.cos(math.radians(45)) / math.cos(math.radians(89)), rel=1e-3
+    )
 
 
 def test_tilt_couples_heading_to_unknown_latitude_near_the_equator():
@@ -291,6 +301,7 @@ def test_tilt_couples_heading_to_unknown_latitude_near_the_equator():
     At 34 deg the latitude-known and -unknown heading bounds agree to 1 %; at the
     equator the unknown-latitude bound is several times worse.
     """
+
     def ratio(lat):
         pose = Pose.from_degrees(lat, 30.0, 1.0, -2.0)
         unknown = crlb(pose, Instrument(), GRADE, 180.0).heading[-1]

@@ -79,7 +79,8 @@ def cycle_table(scen: Scenario) -> dict:
             "turns_horizontal_s": ci.turns[:2, :2],
             "residual_drift_fraction": ci.residual_drift_fraction,
             "equivalent_horizontal_drift_deg_h": ci.residual_drift_fraction
-            * float(np.max(np.abs(scen.imu.gyro_bias[:2]))) / DEG_PER_HOUR,
+            * float(np.max(np.abs(scen.imu.gyro_bias[:2])))
+            / DEG_PER_HOUR,
             "up_axis_cycle_integral_s": ci.full[2, 2],
             "motor_starts_per_hour": ci.motor_starts_per_hour,
         }
@@ -204,14 +205,33 @@ def build(scen: Scenario, runs: dict[str, dict[str, SchemeRun]], cyc: dict, timi
     for name in scen.compare[1:]:
         c = cyc[name]
         h = np.asarray(c["horizontal_cycle_integral_s"])
-        rows.append([
-            name, c["cycle_time_s"], h[0, 0], h[0, 1], h[1, 0], h[1, 1],
-            np.asarray(c["turns_horizontal_s"])[0, 0], 100 * c["residual_drift_fraction"],
-            c["equivalent_horizontal_drift_deg_h"], c["motor_starts_per_hour"],
-        ])
+        rows.append(
+            [
+                name,
+                c["cycle_time_s"],
+                h[0, 0],
+                h[0, 1],
+                h[1, 0],
+                h[1, 1],
+                np.asarray(c["turns_horizontal_s"])[0, 0],
+                100 * c["residual_drift_fraction"],
+                c["equivalent_horizontal_drift_deg_h"],
+                c["motor_starts_per_hour"],
+            ]
+        )
     rep.table(
-        ["scheme", "cycle (s)", "E,x (s)", "E,y (s)", "N,x (s)", "N,y (s)", "turns E,x (s)",
-         "residual (% of bias)", "equivalent drift (deg/h)", "motor starts/h"],
+        [
+            "scheme",
+            "cycle (s)",
+            "E,x (s)",
+            "E,y (s)",
+            "N,x (s)",
+            "N,y (s)",
+            "turns E,x (s)",
+            "residual (% of bias)",
+            "equivalent drift (deg/h)",
+            "motor starts/h",
+        ],
         rows,
     )
     rep.heading("Heading error")

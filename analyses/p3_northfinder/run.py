@@ -80,7 +80,10 @@ def load_scenario(path: Path, quick: bool) -> dict:
     )
     mc, req, th = data["monte_carlo"], data["requirement"], data["time_history"]
     rs, gs, bi, mp, sa = (
-        data["rate_sweep"], data["grade_sweep"], data["bias_instability"], data["map"],
+        data["rate_sweep"],
+        data["grade_sweep"],
+        data["bias_instability"],
+        data["map"],
         data["small_angle"],
     )
     prefix = "quick_" if quick else ""
@@ -126,8 +129,13 @@ def scaled_gyro(grade: SensorGrade, factor: float) -> SensorGrade:
 
 def time_history(sc: dict) -> tuple[dict, object]:
     res = monte_carlo(
-        sc["pose"], sc["instrument"], sc["grade"], sc["history_duration"],
-        n_runs=sc["runs"], seed=sc["seed"], desc="time history",
+        sc["pose"],
+        sc["instrument"],
+        sc["grade"],
+        sc["history_duration"],
+        n_runs=sc["runs"],
+        seed=sc["seed"],
+        desc="time history",
     )
     k3 = int(np.argmin(np.abs(res.times - sc["time"])))
     out = {
@@ -182,8 +190,11 @@ def required_factor(pose, ins, grade, duration, target) -> float:
     lo, hi = 1e-3, 1e3
     for _ in range(40):
         mid = math.sqrt(lo * hi)
-        lo, hi = (mid, hi) if _bound_at(pose, ins, scaled_gyro(grade, mid), duration) <= target \
+        lo, hi = (
+            (mid, hi)
+            if _bound_at(pose, ins, scaled_gyro(grade, mid), duration) <= target
             else (lo, mid)
+        )
     return lo
 
 
@@ -193,28 +204,33 @@ def grade_sweep(sc: dict) -> dict:
     for f in progress(sc["factors"], total=len(sc["factors"]), desc="grade sweep"):
         g = scaled_gyro(grade, f)
         res = monte_carlo(pose, ins, g, t, n_runs=sc["runs"], seed=sc["seed"], desc=f"x{f:g}")
-        rows.append({
-            "factor": f,
-            "arw_deg_sqrt_h": g.gyro_arw / DEG_PER_SQRT_HOUR,
-            "bias_instability_deg_h": g.gyro_bias_instability / DEG_PER_HOUR,
-            "mc_sigma_mil": float(res.heading_sigma()[-1] / MIL),
-            "mc_bias_mil": float(res.heading_bias()[-1] / MIL),
-            "crlb_mil": float(res.bound.heading[-1] / MIL),
-        })
+        rows.append(
+            {
+                "factor": f,
+                "arw_deg_sqrt_h": g.gyro_arw / DEG_PER_SQRT_HOUR,
+                "bias_instability_deg_h": g.gyro_bias_instability / DEG_PER_HOUR,
+                "mc_sigma_mil": float(res.heading_sigma()[-1] / MIL),
+                "mc_bias_mil": float(res.heading_bias()[-1] / MIL),
+                "crlb_mil": float(res.bound.heading[-1] / MIL),
+            }
+        )
     need = required_factor(pose, ins, grade, t, sc["requirement"])
     g_need = scaled_gyro(grade, need)
-    check = monte_carlo(pose, ins, g_need, t, n_runs=sc["check_runs"], seed=sc["seed"] + 1,
-                        desc="required grade")
+    check = monte_carlo(
+        pose, ins, g_need, t, n_runs=sc["check_runs"], seed=sc["seed"] + 1, desc="required grade"
+    )
     by_lat = []
     for lat in sc["grade_latitudes"]:
         p = replace(pose, lat=lat)
         f = required_factor(p, ins, grade, t, sc["requirement"])
-        by_lat.append({
-            "latitude_deg": lat / DEG,
-            "factor": f,
-            "arw_deg_sqrt_h": grade.gyro_arw * f / DEG_PER_SQRT_HOUR,
-            "bias_instability_deg_h": grade.gyro_bias_instability * f / DEG_PER_HOUR,
-        })
+        by_lat.append(
+            {
+                "latitude_deg": lat / DEG,
+                "factor": f,
+                "arw_deg_sqrt_h": grade.gyro_arw * f / DEG_PER_SQRT_HOUR,
+                "bias_instability_deg_h": grade.gyro_bias_instability * f / DEG_PER_HOUR,
+            }
+        )
     return {
         "rows": rows,
         "required": {
@@ -235,11 +251,13 @@ def bias_instability_table(sc: dict) -> dict:
     rows = []
     for tau in sc["bi_taus"]:
         s = bias_instability_psd(g.gyro_bias_instability, tau, w)
-        rows.append({
-            "tau_s": tau,
-            "psd_ratio": s / g.gyro_arw**2,
-            "sigma_inflation": math.sqrt(1.0 + s / g.gyro_arw**2),
-        })
+        rows.append(
+            {
+                "tau_s": tau,
+                "psd_ratio": s / g.gyro_arw**2,
+                "sigma_inflation": math.sqrt(1.0 + s / g.gyro_arw**2),
+            }
+        )
     worst = math.sqrt(1.0 + g.gyro_bias_instability**2 / abs(w) / g.gyro_arw**2)
     return {"rows": rows, "worst_case_inflation": worst}
 
@@ -263,19 +281,28 @@ def heading_latitude_map(sc: dict) -> dict:
     grid = [(lat, h) for lat in sc["mc_latitudes"] for h in sc["mc_headings"]]
     for k, (lat, h) in enumerate(progress(grid, total=len(grid), desc="Monte Carlo map")):
         # Independent seeds per cell, so the spread over cells shows the sampling error.
-        res = monte_carlo(replace(pose, lat=lat, heading=h), ins, grade, t,
-                          n_runs=sc["mc_map_runs"], seed=sc["seed"] + 1000 + k, desc="cell")
+        res = monte_carlo(
+            replace(pose, lat=lat, heading=h),
+            ins,
+            grade,
+            t,
+            n_runs=sc["mc_map_runs"],
+            seed=sc["seed"] + 1000 + k,
+            desc="cell",
+        )
         sigma, bias = res.heading_sigma()[-1], res.heading_bias()[-1]
-        cells.append({
-            "latitude_deg": lat / DEG,
-            "heading_deg": h / DEG,
-            "mc_sigma_mil": float(sigma / MIL),
-            "mc_bias_mil": float(bias / MIL),
-            "crlb_mil": float(res.bound.heading[-1] / MIL),
-            "ratio": float(sigma / res.bound.heading[-1]),
-            "bias_in_sigma": float(abs(bias) / sigma),
-            "ambiguous_fraction": float(res.ambiguous[-1].mean()),
-        })
+        cells.append(
+            {
+                "latitude_deg": lat / DEG,
+                "heading_deg": h / DEG,
+                "mc_sigma_mil": float(sigma / MIL),
+                "mc_bias_mil": float(bias / MIL),
+                "crlb_mil": float(res.bound.heading[-1] / MIL),
+                "ratio": float(sigma / res.bound.heading[-1]),
+                "bias_in_sigma": float(abs(bias) / sigma),
+                "ambiguous_fraction": float(res.ambiguous[-1].mean()),
+            }
+        )
     return {
         "headings_deg": headings / DEG,
         "latitudes_deg": lats / DEG,
@@ -318,11 +345,19 @@ def rate_figure(r: dict, req_mil: float) -> Figure:
     ax = fig.add_subplot()
     rates = [row["rate_deg_s"] for row in r["rows"]]
     for label, style in (("default", "o-"), ("stress", "s-")):
-        ax.loglog(rates, [row[f"{label}_mc_sigma_mil"] for row in r["rows"]], style,
-                  label=f"Monte Carlo, {label} gyro bias instability")
+        ax.loglog(
+            rates,
+            [row[f"{label}_mc_sigma_mil"] for row in r["rows"]],
+            style,
+            label=f"Monte Carlo, {label} gyro bias instability",
+        )
         ax.loglog(rates, [row[f"{label}_crlb_bi_mil"] for row in r["rows"]], "k:", lw=0.8)
-    ax.loglog(rates, [row["default_crlb_mil"] for row in r["rows"]], "k--",
-              label="CRLB, white noise (dotted: + bias instability)")
+    ax.loglog(
+        rates,
+        [row["default_crlb_mil"] for row in r["rows"]],
+        "k--",
+        label="CRLB, white noise (dotted: + bias instability)",
+    )
     ax.axhline(req_mil, color="r", lw=0.8, label="requirement")
     ax.set_xlabel("table rate [deg/s]")
     ax.set_ylabel("heading 1σ at the requirement time [mil]")
@@ -350,8 +385,10 @@ def map_figure(m: dict) -> Figure:
     fig = Figure(figsize=(11, 4.4), layout="constrained")
     h, lat = np.asarray(m["headings_deg"]), np.asarray(m["latitudes_deg"])
     for k, (key, label) in enumerate(
-        (("crlb_heading_mil", "heading CRLB [mil], log10"),
-         ("crlb_latitude_deg", "latitude CRLB [deg], log10"))
+        (
+            ("crlb_heading_mil", "heading CRLB [mil], log10"),
+            ("crlb_latitude_deg", "latitude CRLB [deg], log10"),
+        )
     ):
         ax = fig.add_subplot(1, 2, k + 1)
         z = np.log10(np.clip(np.asarray(m[key], dtype=float), 1e-6, 1e3))
@@ -420,8 +457,10 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
     )
     rep.table(
         ["latitude [deg]", "required ARW [deg/√h]", "bias instability [deg/h]", "factor"],
-        [[r["latitude_deg"], r["arw_deg_sqrt_h"], r["bias_instability_deg_h"], r["factor"]]
-         for r in gs["required_by_latitude"]],
+        [
+            [r["latitude_deg"], r["arw_deg_sqrt_h"], r["bias_instability_deg_h"], r["factor"]]
+            for r in gs["required_by_latitude"]
+        ],
     )
     rep.paragraph(
         "The accelerometer grade hardly matters: at the default VRW the pitch/roll "
@@ -444,14 +483,23 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
         "because the measurement model is linear in the states and exact."
     )
     rep.figure(heading_history_figure(history_result), "heading_vs_time", "Heading error vs time")
-    rep.figure(latitude_history_figure(history_result), "latitude_vs_time",
-               "Latitude error vs time")
+    rep.figure(
+        latitude_history_figure(history_result), "latitude_vs_time", "Latitude error vs time"
+    )
     rep.heading("Heading accuracy vs table rate")
     rows = rs["rows"]
     rep.table(
         ["rate [deg/s]", "MC 1σ [mil]", "CRLB [mil]", "stress MC 1σ [mil]", "stress CRLB+BI [mil]"],
-        [[r["rate_deg_s"], r["default_mc_sigma_mil"], r["default_crlb_mil"],
-          r["stress_mc_sigma_mil"], r["stress_crlb_bi_mil"]] for r in rows],
+        [
+            [
+                r["rate_deg_s"],
+                r["default_mc_sigma_mil"],
+                r["default_crlb_mil"],
+                r["stress_mc_sigma_mil"],
+                r["stress_crlb_bi_mil"],
+            ]
+            for r in rows
+        ],
     )
     slow, fast = rows[0], rows[-1]
     period = sc["instrument"].filter_period
@@ -478,8 +526,16 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
     rep.heading("Heading accuracy vs gyro grade")
     rep.table(
         ["ARW [deg/√h]", "BI [deg/h]", "MC 1σ [mil]", "MC bias [mil]", "CRLB [mil]"],
-        [[r["arw_deg_sqrt_h"], r["bias_instability_deg_h"], r["mc_sigma_mil"],
-          r["mc_bias_mil"], r["crlb_mil"]] for r in gs["rows"]],
+        [
+            [
+                r["arw_deg_sqrt_h"],
+                r["bias_instability_deg_h"],
+                r["mc_sigma_mil"],
+                r["mc_bias_mil"],
+                r["crlb_mil"],
+            ]
+            for r in gs["rows"]
+        ],
     )
     rep.figure(grade_figure(gs, req_mil), "heading_vs_grade", "Heading 1σ vs gyro grade")
     rep.heading("Bias instability and the bound")
@@ -514,9 +570,11 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
             f"{np.mean(ratios):.3f}, where the sampling spread of one cell's σ is "
             f"{100 * spread:.0f} % (1σ); the largest |bias| is {worst_bias:.1f} standard "
             "errors of the mean. "
-            + ("Every quadrant and both hemispheres are solved."
-               if worst_bias < 5 and max(abs(r - 1) for r in ratios) < 5 * spread
-               else "**Some cells fall outside five sampling sigmas: investigate.**")
+            + (
+                "Every quadrant and both hemispheres are solved."
+                if worst_bias < 5 and max(abs(r - 1) for r in ratios) < 5 * spread
+                else "**Some cells fall outside five sampling sigmas: investigate.**"
+            )
         )
     lat_axis = np.asarray(mp["latitudes_deg"])
     near = np.abs(lat_axis) < 10
@@ -539,11 +597,15 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
                 f"{100 * max(c['ambiguous_fraction'] for c in band):.0f} % of a cell's runs "
                 "are flagged ambiguous (both roots in the same hemisphere)."
             )
-        rep.paragraph(text + " There, give the latitude (`--latitude-known`) or level the "
-                      "table better.")
+        rep.paragraph(
+            text + " There, give the latitude (`--latitude-known`) or level the table better."
+        )
     rep.figure(map_figure(mp), "map_bound", "Cramér-Rao bounds over heading × latitude")
-    rep.figure(mc_map_figure(mp), "map_monte_carlo",
-               "Monte Carlo σ / CRLB and bias over heading × latitude")
+    rep.figure(
+        mc_map_figure(mp),
+        "map_monte_carlo",
+        "Monte Carlo σ / CRLB and bias over heading × latitude",
+    )
     rep.heading("P3's small-angle model against the exact inversion (noise-free)")
     rep.paragraph(
         "P3's formulas keep pitch and roll exact but take the mounting angles to first "
@@ -551,11 +613,27 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
         "geometry; the table gives the noise-free errors of both at the base case."
     )
     rep.table(
-        ["mounting", "angle [deg]", "P3 heading [mil]", "P3 latitude [deg]",
-         "P3 pitch [µrad]", "exact heading [mil]", "exact latitude [deg]"],
-        [[r["mounting"], r["angle_deg"], r["p3_heading_mil"], r["p3_latitude_deg"],
-          r["p3_pitch_urad"], r["exact_heading_mil"], r["exact_latitude_deg"]]
-         for r in sa["rows"]],
+        [
+            "mounting",
+            "angle [deg]",
+            "P3 heading [mil]",
+            "P3 latitude [deg]",
+            "P3 pitch [µrad]",
+            "exact heading [mil]",
+            "exact latitude [deg]",
+        ],
+        [
+            [
+                r["mounting"],
+                r["angle_deg"],
+                r["p3_heading_mil"],
+                r["p3_latitude_deg"],
+                r["p3_pitch_urad"],
+                r["exact_heading_mil"],
+                r["exact_latitude_deg"],
+            ]
+            for r in sa["rows"]
+        ],
         fmt="{:.3g}",
     )
     rep.results.update(results)
@@ -589,9 +667,11 @@ def main(argv: list[str] | None = None) -> int:
     # The report module names its Markdown report.md; the analysis convention is REPORT.md.
     os.replace(path / "report.md", path / "REPORT.md")
     need = results["grade_sweep"]["required"]
-    print(f"wrote {path} in {results['elapsed_s']:.0f} s; "
-          f"required ARW {need['arw_deg_sqrt_h']:.3g} deg/sqrt(h) for "
-          f"{sc['requirement'] / MIL:g} mil in {sc['time'] / 60:g} min")
+    print(
+        f"wrote {path} in {results['elapsed_s']:.0f} s; "
+        f"required ARW {need['arw_deg_sqrt_h']:.3g} deg/sqrt(h) for "
+        f"{sc['requirement'] / MIL:g} mil in {sc['time'] / 60:g} min"
+    )
     return 0
 
 

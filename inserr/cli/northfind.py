@@ -103,8 +103,9 @@ def _integer(text: str, flag: str, minimum: int) -> int:
     try:
         v = int(str(text).strip())
     except ValueError:
-        raise InputError(flag, f"{text!r} is not an integer", f"give an integer >= {minimum}") \
-            from None
+        raise InputError(
+            flag, f"{text!r} is not an integer", f"give an integer >= {minimum}"
+        ) from None
     if v < minimum:
         raise InputError(flag, f"must be >= {minimum}, got {v}", f"give an integer >= {minimum}")
     return v
@@ -255,4 +256,3 @@ def _write_report(out: str, result, summary: dict, args: argparse.Namespace) -> 
         "fraction_within_0p5_mil": result.fraction_within(),
     }
     return rep.write(out)
-
