@@ -67,7 +67,6 @@ class Discretizer:
         self._nav_nodes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         # Shared across threads (discretizer_for): one lock guards the caches.
         self._lock = threading.RLock()
-        self.n_control_calls = 0
 
     def key(self, omega_n: np.ndarray, dt: float) -> tuple:
         """Cache key; ``w`` is ignored when the model has no rotating states."""
@@ -102,7 +101,6 @@ class Discretizer:
                 phi = np.eye(self.model.layout.n)
             else:
                 phi = np.asarray(control.sample_system(self.model.state_space(w), h, "zoh").A)
-                self.n_control_calls += 1
             self._store(key, phi)
         return phi
 
@@ -214,10 +212,6 @@ class Discretizer:
             for old in list(self._phi)[: MAX_CACHE // 4]:
                 del self._phi[old]
         self._phi[key] = phi
-
-    def cache_size(self) -> int:
-        """Number of distinct transition matrices computed so far."""
-        return len(self._phi)
 
 
 @lru_cache(maxsize=16)

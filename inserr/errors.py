@@ -45,14 +45,6 @@ def require_finite(value: float, field: str) -> float:
     return v
 
 
-def require_positive(value: float, field: str, what: str = "value") -> float:
-    """Return ``value`` if finite and > 0, else raise :class:`InputError`."""
-    v = require_finite(value, field)
-    if v <= 0:
-        raise InputError(field, f"{what} must be positive, got {v:g}", f"give a {what} > 0")
-    return v
-
-
 def require_latitude(lat_rad: float, field: str = "--lat") -> float:
     """Check a latitude in radians is finite and strictly inside (-90 deg, 90 deg).
 

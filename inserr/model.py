@@ -46,7 +46,7 @@ from functools import cached_property
 
 import numpy as np
 
-from inserr.earth import OMEGA_IE, Site
+from inserr.earth import Site
 from inserr.errors import InputError
 from inserr.rotations import skew
 
@@ -473,8 +473,3 @@ def modes(model: ErrorModel) -> Modes:
         eigenvalues=ev,
         vertical_time_constant_s=float(1.0 / vert.max()) if len(vert) else None,
     )
-
-
-def earth_period_s() -> float:
-    """Sidereal day 2 pi / Omega, s (for reference in reports)."""
-    return 2.0 * math.pi / OMEGA_IE

@@ -6,8 +6,6 @@ miles, arc-seconds/arc-minutes), returning a matplotlib Figure.
 
 from __future__ import annotations
 
-import math
-
 import matplotlib
 
 matplotlib.use("Agg")
@@ -129,8 +127,3 @@ def table_angle(timeline, title: str = "Table angle and horizontal projection") 
 def close(fig) -> None:
     """Close a figure (when it is not added to a report)."""
     plt.close(fig)
-
-
-def finite(x: float) -> float:
-    """x, or nan when not finite (for table cells)."""
-    return x if math.isfinite(x) else float("nan")

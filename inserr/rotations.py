@@ -110,9 +110,3 @@ def log_so3(c: np.ndarray) -> np.ndarray:
     small = s < 1e-12
     factor = np.where(small, 1.0 + angle**2 / 6.0, angle / np.where(small, 1.0, s))
     return w * factor[..., None]
-
-
-def orthonormalize(c: np.ndarray) -> np.ndarray:
-    """Nearest rotation matrix (polar decomposition via SVD); (..., 3, 3)."""
-    u, _, vt = np.linalg.svd(c)
-    return u @ vt

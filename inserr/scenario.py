@@ -263,9 +263,6 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
             "site.earth", f"unknown Earth model {si['earth']!r}", "use ellipsoid or spherical"
         )
     site = Site(si["latitude"], si["longitude"], si["height"], spherical=si["earth"] == "spherical")
-    mis = {}
-    for name in ("gyro_misalignment", "accel_misalignment"):
-        mis[name] = im[name]
     try:
         imu = ImuErrors(
             gyro_bias=im["gyro_bias"],
@@ -278,7 +275,8 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
             accel_bias_instability=im["accel_bias_instability"],
             gyro_correlation_time=im["gyro_correlation_time"],
             accel_correlation_time=im["accel_correlation_time"],
-            **mis,
+            gyro_misalignment=im["gyro_misalignment"],
+            accel_misalignment=im["accel_misalignment"],
         )
     except InputError as exc:
         raise InputError(f"imu.{exc.field}", exc.problem, exc.fix) from None

@@ -112,7 +112,6 @@ def build_timeline(
         c_sn,
         w,
         tuple(labels),
-        table_angle=None,
         motor_starts=table.motor_starts(),
         meta={"table": table, "motion": motion, "exact_intervals": int(exact.sum())},
     )

@@ -124,9 +124,3 @@ def source_matrix(model: ErrorModel, sources: list[Source], c_sn0: np.ndarray) -
     if not sources:
         return np.zeros((model.layout.n, 0))
     return np.column_stack([unit_column(model, s, c_sn0) for s in sources])
-
-
-def initial_state(model: ErrorModel, sources: list[Source], c_sn0: np.ndarray) -> np.ndarray:
-    """The deterministic initial augmented state: sum of unit columns times signed values."""
-    values = np.array([s.value for s in sources])
-    return source_matrix(model, sources, c_sn0) @ values if sources else np.zeros(model.layout.n)

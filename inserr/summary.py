@@ -10,7 +10,7 @@ from inserr.earth import Site
 from inserr.report import Report
 from inserr.scenario import Scenario
 from inserr.timeline import Timeline
-from inserr.units import ARCSEC, DEG, HOUR, MICRO_G, NMI, PPM
+from inserr.units import ARCSEC, DEG, HOUR, MICRO_G, PPM
 
 
 @dataclass
@@ -172,8 +172,3 @@ def build_report(scen: Scenario, runs: list[SchemeRun], title: str | None = None
         "runs": [r.metrics() for r in runs],
     }
     return rep
-
-
-def nmi(x: float) -> float:
-    """metres -> nautical miles."""
-    return x / NMI

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from inserr.errors import InputError
-from inserr.rotations import log_so3, skew
+from inserr.rotations import skew
 
 
 @dataclass(frozen=True)
@@ -36,15 +36,16 @@ class Timeline:
         Angular velocity of s relative to n, resolved in n, in each interval.
     labels : (K,) str, optional
         What each interval is ("stop A", "rotate +180", "swing", ...).
-    table_angle : (K+1,) rad, optional
-        Turntable angle at the nodes (for plots and reports).
+    motor_starts : int
+        Table motor starts over the run (from the scheme).
+    meta : dict
+        The table schedule and vehicle motion it was built from, for plots.
     """
 
     times: np.ndarray
     c_sn: np.ndarray
     omega_n: np.ndarray
     labels: tuple[str, ...] = ()
-    table_angle: np.ndarray | None = None
     motor_starts: int = 0
     meta: dict = field(default_factory=dict, compare=False)
 
@@ -72,20 +73,6 @@ class Timeline:
         """A single stop of ``duration`` seconds with constant ``C_s^n``."""
         c = np.asarray(c_sn, dtype=float)
         return cls(np.array([0.0, duration]), np.stack([c, c]), np.zeros((1, 3)), (label,))
-
-    @classmethod
-    def from_nodes(cls, times: np.ndarray, c_sn: np.ndarray, labels=(), **kw) -> Timeline:
-        """Build a timeline from exact node attitudes; ``w`` is the geodesic rate.
-
-        ``w_k = log(C_{k+1} C_k^T) / dt_k``, so each interval turns along the
-        shortest rotation between consecutive exact attitudes (requires less than
-        180 deg per interval).
-        """
-        times = np.asarray(times, dtype=float)
-        c = np.asarray(c_sn, dtype=float)
-        rel = c[1:] @ np.swapaxes(c[:-1], -1, -2)
-        w = log_so3(rel) / np.diff(times)[:, None]
-        return cls(times, c, w, tuple(labels), **kw)
 
     def attitude_at(self, t: np.ndarray) -> np.ndarray:
         """``C_s^n`` at arbitrary times (s), exact along each interval; (len(t), 3, 3)."""

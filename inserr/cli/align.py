@@ -43,15 +43,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default="60",
         help="stop time of the scheme, s (default 60: several positions in 10 min)",
     )
-    p.add_argument("--heading", default="0", help="vehicle heading, deg")
-    p.add_argument("--pitch", default="0", help="vehicle pitch, deg")
-    p.add_argument("--roll", default="0", help="vehicle roll, deg")
-    p.add_argument(
-        "--yaw-swing",
-        default=None,
-        metavar="AMP,PERIOD",
-        help="swinging base: peak yaw rate deg/s, period s",
-    )
+    add_motion_flags(p)
     p.add_argument("--zupt-rate", default="1", help="zero-velocity update rate, Hz (default 1)")
     p.add_argument(
         "--zupt-sigma", default="0.001", help="zero-velocity measurement 1σ, m/s (default 0.001)"
@@ -80,6 +72,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the simulated run")
     p.add_argument("--out", default=None, help="write a report directory here")
     add_json_flag(p)
+
+
+def add_motion_flags(p: argparse.ArgumentParser, note: str = "") -> None:
+    """``--heading/--pitch/--roll`` (deg) and ``--yaw-swing AMP,PERIOD`` of the vehicle."""
+    p.add_argument("--heading", default="0", help=f"{note}vehicle heading, deg")
+    p.add_argument("--pitch", default="0", help=f"{note}vehicle pitch, deg")
+    p.add_argument("--roll", default="0", help=f"{note}vehicle roll, deg")
+    p.add_argument(
+        "--yaw-swing",
+        default=None,
+        metavar="AMP,PERIOD",
+        help=f"{note}swinging base: peak yaw rate deg/s, period s",
+    )
 
 
 def quantity_flag(text: str, kind: str, flag: str, unit: str) -> float:

@@ -28,7 +28,7 @@ from inserr.calibration import (
     MonteCarloConfig,
     p1_truth,
 )
-from inserr.cli.common import add_json_flag, emit, format_table
+from inserr.cli.common import add_json_flag, emit, format_table, parse_int
 from inserr.earth import Site
 from inserr.errors import InputError, require_latitude
 from inserr.mechanism import (
@@ -128,18 +128,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_json_flag(parser)
 
 
-def _int(text: str, flag: str, minimum: int) -> int:
-    try:
-        v = int(str(text).strip())
-    except ValueError:
-        raise InputError(
-            flag, f"{text!r} is not an integer", f"give an integer >= {minimum}"
-        ) from None
-    if v < minimum:
-        raise InputError(flag, f"must be >= {minimum}, got {v}")
-    return v
-
-
 def _nonneg(text: str, kind: str, flag: str, unit: str) -> float:
     v = parse_quantity(text, kind, flag, default_unit=unit)
     if v < 0:
@@ -183,7 +171,7 @@ def _design(args: argparse.Namespace, site: Site, rate: float, settle: float, ar
             "--design-sizes", f"cannot read {args.design_sizes!r}", "give e.g. 4,5,6"
         ) from None
     step = _positive(args.design_step, "angle", "--design-step", "deg")
-    top = _int(args.top, "--top", 1)
+    top = parse_int(args.top, "--top", 1)
     cands = design_sets(site, dwell, sizes, args.design_sensors, step, rate, settle, top)
     refs = {
         name: set_criterion(fn(dwell, rate, settle), site, args.design_sensors)
@@ -263,8 +251,8 @@ def run(args: argparse.Namespace) -> int:
     if args.design:
         return _design(args, site, rate, settle, arw)
     config = MonteCarloConfig(
-        runs=_int(args.runs, "--runs", 2),
-        seed=_int(args.seed, "--seed", 0),
+        runs=parse_int(args.runs, "--runs", 2),
+        seed=parse_int(args.seed, "--seed", 0),
         positioning_error=_nonneg(args.positioning_error, "angle", "--positioning-error", "arcsec"),
         positioning_model=args.positioning_model,
         per_sample=args.per_sample,

@@ -54,6 +54,19 @@ def axes(text: str | None, kind: str, flag: str, unit: str):
     return parse_quantity(text, kind, flag, default_unit=unit, size=3)
 
 
+def parse_int(text: str, flag: str, minimum: int) -> int:
+    """An integer flag value >= ``minimum``, or :class:`InputError` naming ``flag``."""
+    try:
+        v = int(str(text).strip())
+    except ValueError:
+        raise InputError(
+            flag, f"{text!r} is not an integer", f"give an integer >= {minimum}"
+        ) from None
+    if v < minimum:
+        raise InputError(flag, f"must be >= {minimum}, got {v}", f"give an integer >= {minimum}")
+    return v
+
+
 def add_json_flag(parser: argparse.ArgumentParser) -> None:
     """Add ``--json`` (machine-readable output on stdout, no progress bars)."""
     parser.add_argument("--json", action="store_true", help="print JSON on stdout")

@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from inserr.cli.common import add_json_flag, emit, format_table
+from inserr.cli.common import add_json_flag, emit, format_table, parse_int
 from inserr.errors import InputError
 from inserr.units import MIL, parse_quantity
 
@@ -99,18 +99,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_json_flag(parser)
 
 
-def _integer(text: str, flag: str, minimum: int) -> int:
-    try:
-        v = int(str(text).strip())
-    except ValueError:
-        raise InputError(
-            flag, f"{text!r} is not an integer", f"give an integer >= {minimum}"
-        ) from None
-    if v < minimum:
-        raise InputError(flag, f"must be >= {minimum}, got {v}", f"give an integer >= {minimum}")
-    return v
-
-
 def _with_flag_names(exc: InputError) -> InputError:
     """Re-label an error raised by the library with the flag the user typed."""
     return InputError(_FIELD_TO_FLAG.get(exc.field, exc.field), exc.problem, exc.fix)
@@ -129,8 +117,8 @@ def _setup(args: argparse.Namespace):
     if v["--minutes"] <= 0:
         minutes = v["--minutes"] / 60.0
         raise InputError("--minutes", f"must be positive, got {minutes:g} min", "give e.g. 3")
-    runs = _integer(args.runs, "--runs", 1)
-    seed = _integer(args.seed, "--seed", 0)
+    runs = parse_int(args.runs, "--runs", 1)
+    seed = parse_int(args.seed, "--seed", 0)
     if args.out is not None and Path(args.out).exists() and not Path(args.out).is_dir():
         raise InputError("--out", f"{args.out!r} exists and is not a directory", "give a directory")
     try:

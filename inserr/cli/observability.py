@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from inserr.cli.align import motion_from_args, quantity_flag
+from inserr.cli.align import add_motion_flags, motion_from_args, quantity_flag
 from inserr.cli.common import add_json_flag, emit, format_table, require
 
 MODELS = ("alignment10", "full")
@@ -46,15 +46,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--minutes", default="10", help="with --scheme: duration, min (default 10)")
     p.add_argument("--rate", default="6", help="with --scheme: table rate, deg/s (default 6)")
     p.add_argument("--stop", default="60", help="with --scheme: stop time, s (default 60)")
-    p.add_argument("--heading", default="0", help="with --scheme: vehicle heading, deg")
-    p.add_argument("--pitch", default="0", help="with --scheme: vehicle pitch, deg")
-    p.add_argument("--roll", default="0", help="with --scheme: vehicle roll, deg")
-    p.add_argument(
-        "--yaw-swing",
-        default=None,
-        metavar="AMP,PERIOD",
-        help="with --scheme: swinging base, peak yaw rate deg/s and period s",
-    )
+    add_motion_flags(p, "with --scheme: ")
     add_json_flag(p)
 
 
