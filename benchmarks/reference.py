@@ -14,7 +14,10 @@ warm-up run. Two scenarios:
   two-position, 72 h; its linear run is heavier (1 s sub-steps of the swing).
 
 The last line, ``linear_vs_nonlinear_speedup: <ratio>``, is the ratio for the
-``done-when`` scenario. Timings share the machine with whatever else runs on it;
+``done-when`` scenario (about 2000 here, above the 1000 target); the line before it
+gives P0 experiment 1's (about 100: the swinging base makes the linear run ~20x
+heavier while the nonlinear cost per hour is unchanged, so the 1000 target is met
+only on a static base). Timings share the machine with whatever else runs on it;
 each linear time is the best of three.
 
 Usage: ``python benchmarks/reference.py [--slice-hours 1] [--rate 100]``
@@ -114,6 +117,11 @@ def main(argv: list[str] | None = None) -> int:
             f"{r['scenario']:>10} {r['hours']:>6g} {r['linear_s']:>9.2f} {r['nonlinear_s']:>12.1f} "
             f"{r['speedup']:>8.0f}"
         )
+    # The nonlinear reference costs the same per simulated hour whatever the motion;
+    # the linear analysis costs more on a swinging base (1 s sub-steps), so its ratio
+    # there is an order of magnitude lower. Both are printed; neither is hidden.
+    for r in results[1:]:
+        print(f"linear_vs_nonlinear_speedup_{r['scenario'].replace('-', '_')}: {r['speedup']:.0f}")
     print(f"linear_vs_nonlinear_speedup: {results[0]['speedup']:.0f}")
     return 0
 

@@ -50,6 +50,24 @@ def timed(grid, root: Path, label: str, **engine) -> tuple[float, str]:
     The CPU time (this process and its finished worker processes) over the wall
     time shows how many cores the run really got: on a shared machine, other
     jobs take their share and the speed-up drops with it.
+
+    Parameters
+    ----------
+    grid : Grid
+        The grid to run (every point must succeed).
+    root : Path
+        Directory for the run's output directory ``root/label``.
+    label : str
+        Name of the run, printed and used as the directory name.
+    **engine
+        ``scheduler`` and ``workers`` for :func:`inserr.sweep_run.run_sweep`.
+
+    Returns
+    -------
+    wall : float
+        Wall time of the sweep (s).
+    results : str
+        The text of its ``results.csv``.
     """
     out = root / label
     cpu0, t0 = os.times(), time.perf_counter()
@@ -66,6 +84,13 @@ def timed(grid, root: Path, label: str, **engine) -> tuple[float, str]:
 
 
 def main() -> None:
+    """Time the sweep of :data:`PARAMS` with 1 and 2 workers and print the speed-up.
+
+    Raises
+    ------
+    AssertionError
+        A point did not succeed, or the results differ between worker counts.
+    """
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--threads", action="store_true", help="also time 2 threads")
     args = parser.parse_args()

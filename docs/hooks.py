@@ -1,10 +1,9 @@
-"""mkdocs hooks of the inserr documentation: generated content, and nav pages not written yet.
+"""mkdocs hooks of the inserr documentation: generated content, and a check of the nav.
 
 * ``on_files`` adds the scheme-catalogue figures (``docs/gen_figures.py``) to the
   site in memory, so no binary is committed and the figures follow the code; and
-  adds a short placeholder for every ``nav`` page that does not exist yet, so the
-  nav can list pages other people are still writing and the strict build passes.
-  Each placeholder is logged (INFO) and says so on the page.
+  warns (failing the strict build) for every ``nav`` page that does not exist, so a
+  deleted or renamed page cannot go unnoticed.
 * ``on_page_markdown`` replaces the markers of ``docs/cli.md`` and ``docs/api.md``
   with the reference generated from the argparse parsers (``docs/gen_cli.py``) and
   the ``:::`` blocks of every inserr module (rendered by mkdocstrings), and warns
@@ -52,21 +51,12 @@ def nav_pages(nav) -> list[tuple[str, str]]:
     return out
 
 
-def placeholder(title: str) -> str:
-    return (
-        f"# {title}\n\n"
-        "*This page is being written.* It is listed here so that the navigation is\n"
-        "complete; its content will appear with the next version of the documentation.\n"
-    )
-
-
 def on_files(files: Files, *, config) -> Files:
     for rel, png in _sibling("gen_figures").scheme_figures().items():
         files.append(File.generated(config, rel, content=png))
     for title, src in nav_pages(config["nav"]):
         if files.get_file_from_path(src) is None:
-            log.info("inserr docs: %s does not exist yet; using a placeholder page", src)
-            files.append(File.generated(config, src, content=placeholder(title)))
+            log.warning("inserr docs: nav page %r (%s) does not exist", title, src)
     return files
 
 

@@ -228,15 +228,30 @@ class AlignmentResult:
         return normalized_eigen(self.p0[np.ix_(idx, idx)], self.p_final[np.ix_(idx, idx)])
 
     def summary(self) -> dict:
-        """Final sigma, convergence time and observability degree keyed by engineering name."""
+        """Final sigma, convergence time, observability degree and the simulated run's error.
+
+        Returns
+        -------
+        dict
+            ``final_sigma``, ``convergence_time_s``, ``observability_degree`` and
+            ``final_error`` (estimate minus truth of the one simulated run at the end),
+            each keyed by engineering name (``phi_e_arcsec``, ``gyro_bias_x_deg_h``, ...).
+        """
         conv = self.convergence_time()
         deg = self.observability_degree()
-        out: dict = {"final_sigma": {}, "convergence_time_s": {}, "observability_degree": {}}
+        err = self.estimate[-1] - self.truth[-1]
+        out: dict = {
+            "final_sigma": {},
+            "convergence_time_s": {},
+            "observability_degree": {},
+            "final_error": {},
+        }
         for i, name in enumerate(STATES):
             key, factor = UNITS[name]
             out["final_sigma"][key] = float(self.final_sigma[i] / factor)
             out["convergence_time_s"][key] = float(conv[i])
             out["observability_degree"][key] = float(deg[i])
+            out["final_error"][key] = float(err[i] / factor)
         return out
 
 
@@ -346,7 +361,11 @@ def run_alignment(
     imu : ImuErrors
         ``arw``, ``vrw`` set the process noise of the filter and of the simulated run;
         ``gyro_bias`` and ``accel_bias`` are the true biases of the simulated run.
-        Other error terms are not modelled by this filter and must be zero.
+        Scale-factor errors and misalignments (IMU frame) act on the simulated run
+        only: the filter does not model them, so table turns kick the true attitude
+        (``K`` x table rate) and the estimate errors show what that costs. The
+        covariance (sigma, convergence, observability degree) does not depend on them.
+        Bias instability is not supported.
     prior : Prior, optional
     settings : Settings, optional
     truth0 : (15,) SI, optional
@@ -362,15 +381,25 @@ def run_alignment(
 
     prior = prior or Prior()
     settings = settings or Settings()
-    if imu.has_scale_misalignment or imu.has_bias_instability:
+    if imu.has_bias_instability:
         raise InputError(
             "imu",
-            "the alignment filter models biases and white noise only",
-            "set scale factors, misalignments and bias instability to zero",
+            "the alignment filter models constant biases and white noise only",
+            "set the bias instability to zero",
         )
     model = ErrorModel(site, Layout(bias=True), vertical=settings.vertical)
     n = model.layout.n
     disc = Discretizer(model, model.noise_intensity(imu.arw, imu.vrw))
+    # The simulated run: the filter's model, plus (when given) the scale-factor and
+    # misalignment matrices K as constant states the filter does not carry. The first
+    # n states of both models have the same meaning, so z = H x_true[:n].
+    if imu.has_scale_misalignment:
+        model_t = ErrorModel(
+            site, Layout(bias=True, scale_misalignment=True), vertical=settings.vertical
+        )
+        disc_t = Discretizer(model_t, model_t.noise_intensity(imu.arw, imu.vrw))
+    else:
+        model_t, disc_t = model, disc
 
     n_meas = int(math.floor(timeline.duration * settings.zupt_rate + 1e-9))
     if n_meas < 1:
@@ -378,6 +407,7 @@ def run_alignment(
     t_meas = np.arange(1, n_meas + 1) / settings.zupt_rate
     steps = make_steps(timeline, t_meas, use_omega=True)
     phis = disc.transitions(steps.unique_omega, steps.unique_dt)
+    phis_t = phis if disc_t is disc else disc_t.transitions(steps.unique_omega, steps.unique_dt)
 
     h = measurement_matrix(model, settings.position_sigma is not None)
     r_diag = np.full(h.shape[0], settings.zupt_sigma**2)
@@ -404,7 +434,13 @@ def run_alignment(
     kf.P = p0.copy()
 
     rng = np.random.default_rng(settings.seed)
-    x_true = m0_inv @ true0
+    if model_t is model:
+        x_true = m0_inv @ true0
+    else:
+        k_imu = np.concatenate([imu.gyro_error_matrix.ravel(), imu.accel_error_matrix.ravel()])
+        x_true = np.linalg.solve(
+            model_t.imu_transform(timeline.c_sn[0]), np.concatenate([m0_inv @ true0, k_imu])
+        )
     attitudes = timeline.attitude_at(t_meas)
     t_all = np.concatenate([[0.0], t_meas])
     est = np.zeros((len(t_all), n))
@@ -421,18 +457,22 @@ def run_alignment(
         if k not in factors:
             factors[k] = _noise_factor(qd)
         kf.predict(F=phi, Q=qd)
-        x_true = phi @ x_true + factors[k] @ rng.standard_normal(n)
+        # Noise drives the navigation states only, whose transition block is the same
+        # in both models: one draw of n normals serves both, so a run with K and one
+        # without see the same noise realization and differ only by K's response.
+        x_true = phis_t[k] @ x_true
+        x_true[:n] += factors[k] @ rng.standard_normal(n)
         rec = int(steps.record[i])
         if rec < 0:
             continue
-        z = h @ x_true + np.sqrt(r_diag) * rng.standard_normal(h.shape[0])
+        z = h @ x_true[:n] + np.sqrt(r_diag) * rng.standard_normal(h.shape[0])
         kf.update(z.reshape(-1, 1), R=r, H=h)
         kf.P = 0.5 * (kf.P + kf.P.T)
         m = report_transform(model, attitudes[rec])
         p_rep = m @ kf.P @ m.T
         est[rec + 1] = m @ kf.x[:, 0]
         sig[rec + 1] = np.sqrt(np.clip(np.diag(p_rep), 0.0, None))
-        tru[rec + 1] = m @ x_true
+        tru[rec + 1] = m @ x_true[:n]
     return AlignmentResult(
         t=t_all,
         estimate=est,
@@ -451,32 +491,44 @@ def run_alignment(
 
 
 def static_floors(
-    site: Site, gyro_sigma, accel_sigma, c_sn: np.ndarray | None = None
+    site: Site,
+    gyro_sigma,
+    accel_sigma,
+    c_sn: np.ndarray | None = None,
+    prior_attitude=None,
 ) -> dict[str, float]:
     """Classic static-alignment limits (rad): tilt ``nabla / g``, heading ``eps_E / Omega cos L``.
 
     On a static base zero-velocity updates cannot separate ``nabla_E`` from ``g phi_N``,
     ``nabla_N`` from ``-g phi_E`` and ``eps_E`` from ``-Omega cos L phi_U`` (plus a small
     ``Omega sin L phi_N`` term), so with a diffuse attitude prior the attitude sigmas
-    settle at these values.
+    settle at these values.  A finite attitude prior is independent information on the
+    same combination: once the combination itself is known exactly, the posterior of the
+    angle obeys ``1/sigma^2 = 1/sigma_prior^2 + 1/floor^2``.
 
     Parameters
     ----------
+    site : Site
+        Latitude (sets ``Omega cos L``) and gravity.
     gyro_sigma, accel_sigma : float or (3,)
         1 sigma of the IMU-frame biases, rad/s and m/s^2.
     c_sn : (3, 3), optional
         IMU attitude (default level, y north), to resolve the biases in n.
+    prior_attitude : float or (3,), optional
+        1 sigma of the attitude prior (phi_E, phi_N, phi_U), rad; default diffuse.
 
     Returns
     -------
-    dict with ``phi_e``, ``phi_n``, ``phi_u`` (rad).
+    dict with ``phi_e``, ``phi_n``, ``phi_u`` (rad, ENU psi-angle components).
     """
     c = np.eye(3) if c_sn is None else np.asarray(c_sn, dtype=float)
     sg = np.sqrt((c**2) @ np.broadcast_to(np.asarray(gyro_sigma, dtype=float), (3,)) ** 2)
     sa = np.sqrt((c**2) @ np.broadcast_to(np.asarray(accel_sigma, dtype=float), (3,)) ** 2)
     om_n = float(site.earth_rate_n[1])
-    return {
-        "phi_e": float(sa[1] / site.g),
-        "phi_n": float(sa[0] / site.g),
-        "phi_u": float(sg[0] / om_n),
-    }
+    floor = np.array([sa[1] / site.g, sa[0] / site.g, sg[0] / om_n])
+    if prior_attitude is not None:
+        p0 = np.broadcast_to(np.asarray(prior_attitude, dtype=float), (3,))
+        with np.errstate(divide="ignore"):
+            info = np.where(floor > 0, 1.0 / floor**2, np.inf) + 1.0 / p0**2
+        floor = 1.0 / np.sqrt(info)
+    return {"phi_e": float(floor[0]), "phi_n": float(floor[1]), "phi_u": float(floor[2])}

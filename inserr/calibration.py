@@ -87,7 +87,21 @@ P1_SAMPLE_RATE = 100.0
 
 
 def p1_truth(arw: float = DEFAULT_ARW, vrw: float = DEFAULT_VRW) -> ImuErrors:
-    """P1's true gyro errors, the stated accelerometer truth, and the given noise (SI)."""
+    """Error budget of P1's simulation: P1's gyro truth, the default accelerometer truth.
+
+    Parameters
+    ----------
+    arw : float
+        Gyro angle random walk, rad/sqrt(s).
+    vrw : float
+        Accelerometer velocity random walk, m/s/sqrt(s).
+
+    Returns
+    -------
+    ImuErrors
+        Biases (rad/s, m/s^2), scale factors (dimensionless) and misalignments (rad) in
+        the IMU frame s, with the given noise; no bias instability.
+    """
     return ImuErrors(
         gyro_bias=P1_GYRO_BIAS,
         gyro_scale_factor=np.full(3, P1_GYRO_SCALE_FACTOR),
@@ -104,10 +118,24 @@ def p1_truth(arw: float = DEFAULT_ARW, vrw: float = DEFAULT_VRW) -> ImuErrors:
 
 
 def parameter_unit(name: str, sensor: str) -> tuple[str, float]:
-    """Engineering unit of a parameter for reports: (label, SI value of one unit).
+    """Engineering unit of a calibration parameter for reports.
 
     Scale factors in ppm, misalignments in arcsec, gyro biases in deg/h and
     accelerometer biases in micro-g.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name from :data:`PARAMETER_NAMES` (``sf_*``, ``mis_*``, ``bias_*``).
+    sensor : str
+        "gyro" or "accel" (only matters for biases).
+
+    Returns
+    -------
+    label : str
+        Unit label ("ppm", "arcsec", "deg/h" or "ug").
+    value : float
+        SI value of one such unit (divide an SI value by it to convert).
     """
     if name.startswith("sf_"):
         return "ppm", PPM
@@ -126,7 +154,22 @@ def _input_text(value: float, sensor: str) -> str:
 
 
 def parameter_vector(scale_factor, misalignment, bias) -> np.ndarray:
-    """Stack 3 scale-factor errors, 6 misalignments (xy, xz, yx, yz, zx, zy), 3 biases (SI)."""
+    """Stack scale factors, misalignments and biases into the 12-parameter vector theta.
+
+    Parameters
+    ----------
+    scale_factor : float or (3,) array
+        Scale-factor errors of axes x, y, z, dimensionless (a scalar is broadcast).
+    misalignment : float or (6,) array
+        Misalignments in the order xy, xz, yx, yz, zx, zy, rad.
+    bias : float or (3,) array
+        Biases of axes x, y, z, IMU frame s: rad/s (gyro) or m/s^2 (accel).
+
+    Returns
+    -------
+    (12,) ndarray
+        ``theta`` in the order of :data:`PARAMETER_NAMES` (SI).
+    """
     return np.concatenate(
         [
             np.broadcast_to(scale_factor, 3),
@@ -137,7 +180,21 @@ def parameter_vector(scale_factor, misalignment, bias) -> np.ndarray:
 
 
 def truth_vector(imu: ImuErrors, sensor: str) -> np.ndarray:
-    """The 12 true parameters of ``sensor`` ("gyro" or "accel") from an error budget (SI)."""
+    """The 12 true calibration parameters of one sensor triad from an error budget.
+
+    Parameters
+    ----------
+    imu : ImuErrors
+        Error budget (SI, IMU frame s).
+    sensor : str
+        "gyro" or "accel".
+
+    Returns
+    -------
+    (12,) ndarray
+        ``theta`` in the order of :data:`PARAMETER_NAMES`: scale factors
+        (dimensionless), misalignments (rad), biases (rad/s or m/s^2).
+    """
     _check_sensor(sensor)
     return parameter_vector(
         getattr(imu, f"{sensor}_scale_factor"),
@@ -147,26 +204,74 @@ def truth_vector(imu: ImuErrors, sensor: str) -> np.ndarray:
 
 
 def error_matrix_of(theta: np.ndarray) -> np.ndarray:
-    """``K = S + M`` (3x3) from a 12-parameter vector."""
+    """Error matrix ``K = S + M`` of a triad from its 12-parameter vector.
+
+    Parameters
+    ----------
+    theta : (12,) array
+        Parameters in the order of :data:`PARAMETER_NAMES` (the biases are ignored).
+
+    Returns
+    -------
+    (3, 3) ndarray
+        ``K`` (dimensionless, IMU frame s): scale factors on the diagonal,
+        ``K[i, j] = mis_ij``.
+    """
     return error_matrix(theta[0:3], theta[3:9])
 
 
 def reference_vector(site: Site, sensor: str) -> np.ndarray:
-    """Input at rest, ENU: Earth rate (rad/s) for "gyro", specific force (m/s^2) for "accel"."""
+    """Reference input sensed at rest: Earth rate or specific force, ENU.
+
+    Parameters
+    ----------
+    site : Site
+        Latitude and gravity.
+    sensor : str
+        "gyro" or "accel".
+
+    Returns
+    -------
+    (3,) ndarray
+        ``[0, W cos L, W sin L]`` rad/s for "gyro", ``[0, 0, g]`` m/s^2 for "accel",
+        navigation frame n (ENU).
+    """
     _check_sensor(sensor)
     return site.earth_rate_n if sensor == "gyro" else site.specific_force_n
 
 
 def sensor_inputs(attitudes: np.ndarray, reference_n: np.ndarray) -> np.ndarray:
-    """Inputs ``u_p = C_p^T r`` (IMU frame, (N, 3)) from ``C_s^n`` (N, 3, 3) and ``r`` (ENU)."""
+    """Nominal sensor inputs ``u_p = C_p^T r`` of every stop, IMU frame s.
+
+    Parameters
+    ----------
+    attitudes : (N, 3, 3) array
+        ``C_s^n`` of the stops (IMU frame s to ENU).
+    reference_n : (3,) array
+        Reference vector ``r`` in ENU: rad/s (Earth rate) or m/s^2 (specific force).
+
+    Returns
+    -------
+    (N, 3) ndarray
+        Inputs in the IMU frame s, same unit as ``reference_n``.
+    """
     return np.einsum("pji,j->pi", np.asarray(attitudes, float), np.asarray(reference_n, float))
 
 
 def design_matrix(inputs: np.ndarray) -> np.ndarray:
-    """Jacobian of the stacked observations ``y`` (3N,) with respect to theta (12,).
+    """Jacobian ``H = dy / dtheta`` of the stacked observations with respect to theta.
 
-    Row ``3 p + i`` is sensor axis i at stop p; columns follow :data:`PARAMETER_NAMES`.
-    Units: the input's for scale-factor and misalignment columns, 1 for bias columns.
+    Parameters
+    ----------
+    inputs : (N, 3) array
+        Nominal inputs ``u_p``, IMU frame s: rad/s (gyro) or m/s^2 (accel).
+
+    Returns
+    -------
+    (3N, 12) ndarray
+        Row ``3 p + i`` is sensor axis i at stop p; columns follow
+        :data:`PARAMETER_NAMES`. Units: the input's for scale-factor and
+        misalignment columns, 1 for bias columns.
     """
     u = np.asarray(inputs, dtype=float)
     n = u.shape[0]
@@ -220,6 +325,7 @@ class Identifiability:
     Attributes
     ----------
     sensor : str
+        "gyro" or "accel".
     rank : int
         Rank of the 12-column design.
     condition_number : float
@@ -253,7 +359,13 @@ class Identifiability:
         return [n for n, ok in zip(PARAMETER_NAMES, self.identifiable, strict=True) if not ok]
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary."""
+        """JSON-ready summary of the identifiability.
+
+        Returns
+        -------
+        dict
+            ``rank``, ``condition_number``, ``unidentifiable`` (names) and ``messages``.
+        """
         return {
             "rank": self.rank,
             "condition_number": self.condition_number,
@@ -294,9 +406,15 @@ def input_relations(inputs: np.ndarray, sensor: str) -> tuple[InputRelation, ...
     Parameters
     ----------
     inputs : (N, 3) array
-        Nominal inputs (rad/s for gyros, m/s^2 for accelerometers), IMU frame.
+        Nominal inputs (rad/s for gyros, m/s^2 for accelerometers), IMU frame s.
     sensor : str
         "gyro" or "accel" (for the words).
+
+    Returns
+    -------
+    tuple of InputRelation
+        One per independent relation (empty when the inputs span 3-D affinely,
+        i.e. all 12 parameters are identifiable).
     """
     u = np.asarray(inputs, dtype=float)
     scale = float(np.max(np.abs(u))) or 1.0
@@ -369,13 +487,20 @@ class CalibrationDesign:
     sensor : str
         "gyro" or "accel".
     attitudes : (N, 3, 3) array
-        Nominal ``C_s^n`` of the stops.
+        Nominal ``C_s^n`` of the stops (IMU frame s to ENU).
     dwell : (N,) array
         Dwell times, s.
     reference_n : (3,) array
         Reference input in ENU (rad/s or m/s^2).
     noise_density : float
         White-noise density of the sensor: ARW (rad/sqrt(s)) or VRW (m/s/sqrt(s)).
+
+    Attributes
+    ----------
+    inputs : (N, 3) ndarray
+        Nominal inputs ``u_p`` (:func:`sensor_inputs`), IMU frame s, unit of ``reference_n``.
+    design : (3N, 12) ndarray
+        Unweighted design matrix (:func:`design_matrix`).
     """
 
     sensor: str
@@ -409,7 +534,23 @@ class CalibrationDesign:
     def from_position_set(
         cls, pset: PositionSet, site: Site, sensor: str, noise_density: float
     ) -> CalibrationDesign:
-        """The design of ``sensor`` for a position set at a site."""
+        """Build the calibration problem of one sensor triad for a position set at a site.
+
+        Parameters
+        ----------
+        pset : PositionSet
+            Nominal stops (attitudes ``C_s^n`` and dwells, s).
+        site : Site
+            Latitude (Earth rate) and gravity.
+        sensor : str
+            "gyro" or "accel".
+        noise_density : float
+            ARW (rad/sqrt(s)) for "gyro", VRW (m/s/sqrt(s)) for "accel".
+
+        Returns
+        -------
+        CalibrationDesign
+        """
         return cls(
             sensor, pset.attitudes, pset.dwells, reference_vector(site, sensor), noise_density
         )
@@ -417,12 +558,12 @@ class CalibrationDesign:
     # --- weighting and scaling ---------------------------------------------------
     @property
     def row_weights(self) -> np.ndarray:
-        """``sqrt(T_p)`` per observation row: the whitening weight up to the constant 1/q."""
+        """Whitening weight ``sqrt(T_p)`` (sqrt(s)) per observation row, (3N,), up to 1/q."""
         return np.repeat(np.sqrt(self.dwell), 3)
 
     @property
     def sigma(self) -> np.ndarray:
-        """1-sigma noise of each stop's dwell average, ``q / sqrt(T_p)``, shape (N,)."""
+        """1-sigma noise of each stop's dwell average, ``q / sqrt(T_p)``, (N,), input unit."""
         return self.noise_density / np.sqrt(self.dwell)
 
     def _scaled(self) -> tuple[np.ndarray, np.ndarray]:
@@ -449,7 +590,13 @@ class CalibrationDesign:
 
         Unit-norm columns make it independent of parameter units and, by van der
         Sluis' theorem, within a factor sqrt(12) of the smallest condition number any
-        diagonal column scaling can give. ``inf`` if the design is rank deficient.
+        diagonal column scaling can give.
+
+        Returns
+        -------
+        float
+            2-norm condition number (dimensionless); ``inf`` if the design is rank
+            deficient.
         """
         if self._svd()[-1] < N_PARAMETERS:
             return math.inf
@@ -459,7 +606,12 @@ class CalibrationDesign:
 
     # --- identifiability -------------------------------------------------------
     def identifiability(self) -> Identifiability:
-        """Rank, condition number and the inseparable parameter groups in words."""
+        """Rank, condition number and the inseparable parameter groups in words.
+
+        Returns
+        -------
+        Identifiability
+        """
         _, _, _, _, vt, rank = self._svd()
         cond = self.condition_number()
         null = vt[rank:]
@@ -476,9 +628,13 @@ class CalibrationDesign:
 
     # --- estimation --------------------------------------------------------------
     def estimator(self) -> np.ndarray:
-        """Matrix ``E`` (12 x 3N) with ``theta_hat = E @ y``: weighted least squares.
+        """Weighted least-squares estimator matrix ``E`` with ``theta_hat = E @ y``.
 
-        Rows of unidentifiable parameters are NaN.
+        Returns
+        -------
+        (12, 3N) ndarray
+            Maps observations ``y`` (input unit) to SI parameters; rows of
+            unidentifiable parameters are NaN.
         """
         hs, norms, u, s, vt, rank = self._svd()
         pinv = (vt[:rank].T / s[:rank]) @ u[:, :rank].T
@@ -493,7 +649,8 @@ class CalibrationDesign:
         Parameters
         ----------
         y : (3N,) or (R, N, 3) or (R, 3N) array
-            Dwell-averaged output minus the nominal input, same unit as the input.
+            Dwell-averaged output minus the nominal input, IMU frame s, same unit as
+            the input (rad/s or m/s^2); R independent calibrations.
 
         Returns
         -------
@@ -514,10 +671,15 @@ class CalibrationDesign:
 
     # --- precision ---------------------------------------------------------------
     def covariance(self) -> np.ndarray:
-        """Cramer-Rao covariance (12 x 12, SI) of the parameters from the white sensor noise.
+        """Cramer-Rao covariance of the parameters from the white sensor noise.
 
-        ``(H^T R^-1 H)^+`` with ``R = diag(q^2 / T_p)``; rows/columns of unidentifiable
-        parameters are ``inf``.
+        ``(H^T R^-1 H)^+`` with ``R = diag(q^2 / T_p)``.
+
+        Returns
+        -------
+        (12, 12) ndarray
+            Covariance in SI units of :data:`PARAMETER_NAMES`; rows/columns of
+            unidentifiable parameters are ``inf``.
         """
         hs, norms, _, s, vt, rank = self._svd()
         cov_s = (vt[:rank].T / s[:rank] ** 2) @ vt[:rank]
@@ -528,7 +690,13 @@ class CalibrationDesign:
         return cov
 
     def crlb_sigma(self) -> np.ndarray:
-        """Cramer-Rao 1-sigma of every parameter (SI), ``inf`` if unidentifiable."""
+        """Cramer-Rao 1-sigma of every parameter.
+
+        Returns
+        -------
+        (12,) ndarray
+            SI (dimensionless, rad, rad/s or m/s^2); ``inf`` if unidentifiable.
+        """
         return np.sqrt(np.diag(self.covariance()))
 
     def positioning_sensitivity(self, k_true: np.ndarray | None = None) -> np.ndarray:
@@ -543,7 +711,13 @@ class CalibrationDesign:
         Parameters
         ----------
         k_true : (3, 3) array, optional
-            True error matrix ``K`` (default zero; its effect is second order).
+            True error matrix ``K`` (dimensionless, IMU frame s; default zero, its
+            effect is second order).
+
+        Returns
+        -------
+        (12, N, 3) ndarray
+            ``J[j, p, k]``: SI parameter unit per rad of rotation about ENU axis k.
         """
         k = np.zeros((3, 3)) if k_true is None else np.asarray(k_true, float)
         e = self.estimator()
@@ -554,11 +728,23 @@ class CalibrationDesign:
 
 
 def gimbal_sensitivity(j_enu: np.ndarray, pset: PositionSet) -> np.ndarray:
-    """Sensitivity to the two gimbal angles, (12, N, 2): [:, p, 0] outer, [:, p, 1] inner.
+    """Parameter sensitivity to the outer and inner gimbal-angle errors of every stop.
 
     A gimbal-angle error is a rotation about that gimbal's axis (in ENU at the stop),
     so it projects the ENU sensitivity of
     :meth:`CalibrationDesign.positioning_sensitivity` on the axis.
+
+    Parameters
+    ----------
+    j_enu : (12, N, 3) array
+        Sensitivity to small rotations about the ENU axes, SI per rad.
+    pset : PositionSet
+        The stops (gimbal angles, rad) and the table whose axes are used.
+
+    Returns
+    -------
+    (12, N, 2) ndarray
+        SI per rad; ``[:, p, 0]`` outer gimbal, ``[:, p, 1]`` inner gimbal.
     """
     axes = np.stack(
         [
@@ -575,11 +761,27 @@ POSITIONING_MODELS = ("three-axis", "gimbal")
 def positioning_sigma(
     design: CalibrationDesign, pset: PositionSet, half_width: float, model: str = "three-axis"
 ) -> np.ndarray:
-    """1-sigma parameter error (12,) from uniform +-``half_width`` (rad) positioning errors.
+    """First-order 1-sigma parameter error from uniform positioning errors of the table.
 
     ``"three-axis"``: at every stop an independent small rotation about each ENU axis;
     ``"gimbal"``: independent errors of the outer and inner gimbal angles. The variance
     of a uniform error is ``half_width^2 / 3``.
+
+    Parameters
+    ----------
+    design : CalibrationDesign
+        The calibration problem of one triad.
+    pset : PositionSet
+        The same stops (needed for the gimbal axes).
+    half_width : float
+        Half-width of each uniform error, rad.
+    model : str
+        "three-axis" or "gimbal".
+
+    Returns
+    -------
+    (12,) ndarray
+        1-sigma in SI units of :data:`PARAMETER_NAMES` (NaN where unidentifiable).
     """
     j = design.positioning_sensitivity()
     if model == "gimbal":
@@ -647,16 +849,22 @@ class MonteCarloConfig:
 
 @dataclass(frozen=True)
 class SensorResult:
-    """Monte Carlo and prediction for one sensor triad (all SI).
+    """Monte Carlo and prediction for one sensor triad (all SI, order of :data:`PARAMETER_NAMES`).
 
     Attributes
     ----------
     sensor : str
+        "gyro" or "accel".
     identifiability : Identifiability
-    truth : (12,) true parameters
-    estimates : (R, 12) estimates of every run (NaN where unidentifiable)
-    crlb_sigma : (12,) Cramer-Rao 1-sigma from the sensor noise
-    positioning_sigma : (12,) first-order 1-sigma from the positioning error
+        What the position set determines.
+    truth : (12,) ndarray
+        True parameters.
+    estimates : (R, 12) ndarray
+        Estimates of every run (NaN where unidentifiable).
+    crlb_sigma : (12,) ndarray
+        Cramer-Rao 1-sigma from the sensor noise.
+    positioning_sigma : (12,) ndarray
+        First-order 1-sigma from the positioning error.
     """
 
     sensor: str
@@ -668,28 +876,36 @@ class SensorResult:
 
     @property
     def deviations(self) -> np.ndarray:
-        """Estimate minus truth per run, (R, 12)."""
+        """Estimate minus truth per run, (R, 12), SI."""
         return self.estimates - self.truth
 
     @property
     def mean_deviation(self) -> np.ndarray:
-        """Mean over runs of estimate minus truth, (12,)."""
+        """Mean over runs of estimate minus truth, (12,), SI."""
         return np.mean(self.deviations, axis=0)
 
     @property
     def std(self) -> np.ndarray:
-        """Sample standard deviation (ddof = 1) of the estimates, (12,)."""
+        """Sample standard deviation (ddof = 1) of the estimates, (12,), SI."""
         return np.std(self.estimates, axis=0, ddof=1)
 
     @property
     def predicted_std(self) -> np.ndarray:
-        """``sqrt(crlb^2 + positioning^2)``: the two error sources are independent."""
+        """Predicted 1-sigma ``sqrt(crlb^2 + positioning^2)``, (12,), SI (independent sources)."""
         return np.hypot(self.crlb_sigma, self.positioning_sigma)
 
     def table(self) -> dict[str, dict[str, Any]]:
-        """Per parameter, in engineering units (:func:`parameter_unit`): unit, true,
-        mean_deviation, std, variance, crlb_sigma, positioning_sigma, predicted_std;
-        ``None`` for values that do not exist (unidentifiable parameter)."""
+        """Monte Carlo statistics and predictions per parameter, in engineering units.
+
+        Returns
+        -------
+        dict
+            ``{name: row}`` over :data:`PARAMETER_NAMES`; each row holds ``unit``
+            (:func:`parameter_unit`), ``true``, ``mean_deviation``, ``std``,
+            ``variance`` (unit squared), ``crlb_sigma``, ``positioning_sigma``,
+            ``predicted_std`` and ``identifiable``; ``None`` for values that do not
+            exist (unidentifiable parameter).
+        """
         out = {}
         for j, name in enumerate(PARAMETER_NAMES):
             unit, f = parameter_unit(name, self.sensor)
@@ -726,7 +942,22 @@ def _rotation_matrices(phi: np.ndarray) -> np.ndarray:
 def true_attitudes(
     pset: PositionSet, config: MonteCarloConfig, rng: np.random.Generator
 ) -> np.ndarray:
-    """Attitudes reached in every run, (R, N, 3, 3), positioning errors drawn from ``rng``."""
+    """True attitudes ``C_s^n`` reached in every run, with random positioning errors.
+
+    Parameters
+    ----------
+    pset : PositionSet
+        Nominal stops.
+    config : MonteCarloConfig
+        Runs R, positioning error half-width (rad) and model.
+    rng : numpy.random.Generator
+        Source of the uniform errors.
+
+    Returns
+    -------
+    (R, N, 3, 3) ndarray
+        ``C_s^n`` (IMU frame s to ENU) of every run and stop.
+    """
     nominal = pset.attitudes
     r, n, a = config.runs, len(pset), config.positioning_error
     if config.positioning_model == "three-axis":

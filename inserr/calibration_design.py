@@ -53,11 +53,23 @@ DESIGN_SENSORS = ("gyro", "gyro+accel")
 
 
 def candidate_tables(rate: float = DEFAULT_RATE, settle: float = 0.0) -> dict[str, TwoAxisTable]:
-    """Mechanisms searched by the designer.
+    """The two-axis table mechanisms searched by the designer.
 
     ``azimuth``: vertical outer axis, inner axis = IMU x (conventional mounting);
     ``azimuth-offaxis``: vertical outer axis, inner axis at -45 deg to IMU x (P1);
     ``trunnion``: horizontal outer axis along east, inner axis = IMU z.
+
+    Parameters
+    ----------
+    rate : float
+        Table indexing rate, rad/s.
+    settle : float
+        Settling time added to every move, s.
+
+    Returns
+    -------
+    dict of str to TwoAxisTable
+        The three mechanisms by name (IMU frame s = ENU at zero gimbal angles).
     """
     return {
         "azimuth": azimuth_table(0.0, rate, settle),
@@ -75,7 +87,11 @@ def _regressors(attitudes: np.ndarray, site: Site, sensor: str) -> np.ndarray:
 def _det_rank(gram: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Determinant and rank of symmetric PSD 4x4 matrices (..., 4, 4)."""
     ev = np.linalg.eigvalsh(gram)
-    # Same relative threshold as the calibration rank test, on eigenvalues (= sigma^2).
+    # Relative threshold 1e-10 on the Gram eigenvalues (sigma^2), i.e. 1e-5 on singular
+    # values: coarser than calibration's RANK_RTOL on singular values because eigvalsh
+    # resolves an exactly singular direction only to ~1e-16 of the largest eigenvalue,
+    # which RANK_RTOL**2 = 1e-20 would count as rank. Designs here are either well
+    # conditioned or exactly singular, so the two tests agree on every candidate.
     tol = 1e-10 * ev[..., -1:]
     rank = np.sum(ev > tol, axis=-1)
     det = np.where(rank == 4, np.prod(np.clip(ev, 0.0, None), axis=-1), 0.0)
@@ -85,9 +101,28 @@ def _det_rank(gram: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def set_criterion(
     pset: PositionSet, site: Site, sensors: str = "gyro", arw: float = 1.0, vrw: float = 1.0
 ) -> float:
-    """Criterion (module docstring) of an existing position set; 0 if not full rank.
+    """D-optimal information per second (module docstring) of an existing position set.
 
-    ``arw``/``vrw`` (SI) only scale the criterion; ratios between sets do not depend on them.
+    Parameters
+    ----------
+    pset : PositionSet
+        The stops (attitudes ``C_s^n``, dwells in s) and the table (indexing time).
+    site : Site
+        Latitude and gravity (the inputs depend on them).
+    sensors : str
+        "gyro" or "gyro+accel".
+    arw : float
+        Gyro ARW, rad/sqrt(s); only scales the criterion (the default 1 matches the
+        unscaled criterion of :func:`design_sets`).
+    vrw : float
+        Accelerometer VRW, m/s/sqrt(s); same role.
+
+    Returns
+    -------
+    float
+        ``det(F_axis)^(1/4) / T_total``, in units of ``1/q^2`` (geometric mean over the
+        sensors); 0 if a design is not full rank. Ratios between sets do not depend
+        on ``arw``/``vrw``.
     """
     _check_sensors(sensors)
     att, w = pset.attitudes, pset.dwells
@@ -107,14 +142,18 @@ class Candidate:
     ----------
     mechanism : str
         Key of :func:`candidate_tables`.
+    table : TwoAxisTable
+        The mechanism itself.
     stops : tuple of (float, float)
         (outer, inner) gimbal angles, rad, in visiting order.
+    dwell : float
+        Dwell per stop, s.
     total_time, indexing_time : float
-        s.
+        Dwell plus indexing time, and indexing time alone, s.
     gyro_rank, accel_rank : int
         Ranks of the 12-parameter designs.
     criterion : float
-        Information per second (module docstring).
+        Information per second (module docstring), with unit noise density.
     equivalents : int
         Number of other sets on the same mechanism with the same size, criterion and time.
     """
@@ -131,7 +170,12 @@ class Candidate:
     equivalents: int = 0
 
     def position_set(self) -> PositionSet:
-        """The candidate as a :class:`PositionSet`."""
+        """The candidate as a :class:`PositionSet` (stops named p1, p2, ...).
+
+        Returns
+        -------
+        PositionSet
+        """
         return PositionSet(
             f"{self.mechanism}-{len(self.stops)}",
             self.table,
@@ -139,7 +183,13 @@ class Candidate:
         )
 
     def stops_deg(self) -> list[tuple[int, int]]:
-        """Gimbal angles in whole degrees, (outer, inner) per stop."""
+        """Gimbal angles of the stops rounded to whole degrees in [0, 360).
+
+        Returns
+        -------
+        list of (int, int)
+            (outer, inner) per stop, deg, in visiting order.
+        """
         return [(round(math.degrees(o)) % 360, round(math.degrees(i)) % 360) for o, i in self.stops]
 
 
@@ -269,7 +319,28 @@ def design_sets(
 def describe_candidate(
     c: Candidate, site: Site, arw: float, best: float, references: dict[str, float]
 ) -> dict:
-    """JSON-ready row: stops (deg), times, ranks, relative efficiency, gyro CRLB extremes."""
+    """JSON-ready report row of a candidate: stops, times, ranks, efficiencies, gyro CRLB.
+
+    Parameters
+    ----------
+    c : Candidate
+        The ranked set.
+    site : Site
+        Latitude and gravity.
+    arw : float
+        Gyro ARW, rad/sqrt(s), for the gyro Cramer-Rao bounds.
+    best : float
+        Criterion of the best candidate (relative efficiency 1).
+    references : dict of str to float
+        Criteria of reference sets (:func:`set_criterion`, unit noise), by name.
+
+    Returns
+    -------
+    dict
+        Stops in deg, times in s, ranks, gyro condition number, ``relative_efficiency``,
+        largest gyro CRLB of the scale factors (ppm) and misalignments (arcsec),
+        ``equivalent_sets`` and ``efficiency_vs_<name>`` per reference.
+    """
     pset = c.position_set()
     gyro = CalibrationDesign.from_position_set(pset, site, "gyro", arw)
     sigma = gyro.crlb_sigma()

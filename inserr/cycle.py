@@ -31,25 +31,69 @@ from inserr.schemes import TableScheme
 
 
 def f_z(x: float) -> np.ndarray:
-    """Antiderivative of ``rot_z(x)`` with respect to x."""
+    """Antiderivative ``F_z(x)`` of ``rot_z(x)`` with respect to x.
+
+    Parameters
+    ----------
+    x : float
+        Angle, rad.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``F_z(x)``, with ``d/dx F_z = rot_z``.
+    """
     s, c = math.sin(x), math.cos(x)
     return np.array([[s, c, 0.0], [-c, s, 0.0], [0.0, 0.0, x]])
 
 
 def f_x(x: float) -> np.ndarray:
-    """Antiderivative of ``rot_x(x)`` with respect to x."""
+    """Antiderivative ``F_x(x)`` of ``rot_x(x)`` with respect to x.
+
+    Parameters
+    ----------
+    x : float
+        Angle, rad.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``F_x(x)``, with ``d/dx F_x = rot_x``.
+    """
     s, c = math.sin(x), math.cos(x)
     return np.array([[x, 0.0, 0.0], [0.0, s, c], [0.0, -c, s]])
 
 
 def g_z(x: float) -> np.ndarray:
-    """Antiderivative of :func:`f_z`."""
+    """Antiderivative ``G_z(x)`` of :func:`f_z` (second antiderivative of ``rot_z``).
+
+    Parameters
+    ----------
+    x : float
+        Angle, rad.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``G_z(x)``, with ``d/dx G_z = F_z``.
+    """
     s, c = math.sin(x), math.cos(x)
     return np.array([[-c, s, 0.0], [-s, -c, 0.0], [0.0, 0.0, 0.5 * x * x]])
 
 
 def g_x(x: float) -> np.ndarray:
-    """Antiderivative of :func:`f_x`."""
+    """Antiderivative ``G_x(x)`` of :func:`f_x` (second antiderivative of ``rot_x``).
+
+    Parameters
+    ----------
+    x : float
+        Angle, rad.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``G_x(x)``, with ``d/dx G_x = F_x``.
+    """
     s, c = math.sin(x), math.cos(x)
     return np.array([[0.5 * x * x, 0.0, 0.0], [0.0, -c, s], [0.0, -s, -c]])
 
@@ -61,6 +105,7 @@ class CycleIntegrals:
     Attributes
     ----------
     cycle_time : float, s
+        Duration of one cycle (turns and their dwells).
     full : (3, 3) s
         Integral of ``C_s^n`` over one cycle (rows ENU, columns IMU x, y, z).
     stops : (3, 3) s
@@ -123,6 +168,19 @@ class CycleIntegrals:
 
         For a bias excursion (s) the result is dimensionless (drift per unit bias);
         for a scale-factor or misalignment excursion (rad) it is rad/s per unit error.
+
+        Parameters
+        ----------
+        earth_rate_n : (3,) array, rad/s
+            Earth rate resolved in ENU (:attr:`inserr.earth.Site.earth_rate_n`).
+        excursion : (3, k) array
+            A mean excursion (rows ENU), e.g. :attr:`mean_excursion` (s) or
+            :attr:`mean_excursion_scale_factor` (rad).
+
+        Returns
+        -------
+        ndarray, shape (3, k)
+            Equivalent drift per unit error, resolved in ENU.
         """
         return np.cross(earth_rate_n, np.asarray(excursion).T).T
 
@@ -138,10 +196,15 @@ def cycle_integrals(scheme: TableScheme, motion: Motion | None = None) -> CycleI
         Static vehicle attitude (heading, pitch, roll); default level, heading 0
         (body = ENU).
 
+    Returns
+    -------
+    CycleIntegrals
+        Integrals of ``C_s^n`` over one cycle (s, or rad for the rate terms).
+
     Raises
     ------
     InputError
-        For closed-loop or non-periodic schemes.
+        For closed-loop or non-periodic schemes, or a non-static motion.
     """
     if not isinstance(scheme, TableScheme) or not scheme.steps:
         name = getattr(scheme, "name", str(scheme))
@@ -151,7 +214,7 @@ def cycle_integrals(scheme: TableScheme, motion: Motion | None = None) -> CycleI
             "cycle integrals exist for periodic open-loop schemes; use `inserr drift` for this one",
         )
     motion = motion or Motion()
-    if type(motion) is not Motion:
+    if not motion.is_static:
         raise InputError("motion", "cycle integrals are defined on a static base")
     c_bn = motion.attitude(np.array([0.0]))[0]
     m = np.eye(3) if scheme.mounting is None else scheme.mounting

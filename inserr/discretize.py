@@ -5,17 +5,26 @@ angular velocity ``w`` (IMU relative to n, resolved in n) and its duration, so
 :class:`Discretizer` caches ``Phi`` and ``Qd`` under the key ``(w, dt)``; a whole
 72 h indexing run typically needs three or four distinct discretizations.
 
-* ``Phi`` comes from python-control: ``control.sample_system(sys, dt, "zoh")`` of the
+* ``Phi`` of stops, of long turns and of every segment of a model without rotating
+  states comes from python-control: ``control.sample_system(sys, dt, "zoh")`` of the
   segment's :class:`control.StateSpace` (the augmented model is homogeneous, so the
   ZOH state matrix is exactly ``expm(A dt)``).
 * ``Qd`` comes from Van Loan's method (:func:`filterpy.common.van_loan_discretization`),
   because python-control has no process-noise discretization.
-* Many *distinct* short segments (continuous vehicle motion cut into sub-steps)
-  are discretized together from the block structure of A (closed-form rotation of
-  the exo states, cached navigation block, Gauss-Legendre quadrature of the one
+* Short *turning* sub-steps (``0 < |w| dt <= MAX_TURN_PER_STEP``) bypass
+  python-control by design. Continuous vehicle motion cut into sub-steps yields
+  many *distinct* ``(w, dt)`` keys (tens of thousands), each a cache miss, and one
+  ``sample_system`` call (a StateSpace build plus a full n x n ``expm``) per
+  sub-step would dominate the run. These sub-steps are instead discretized
+  together, vectorised, from the block structure of A (closed-form rotation of the
+  exo states, cached navigation block, Gauss-Legendre quadrature of the one
   coupling integral), which is exact to roundoff for the sub-step sizes used and
-  ~100x faster than one expm per sub-step; ``tests/test_model.py`` checks it
-  against python-control.
+  some tens of times faster per sub-step. ``tests/test_model.py``
+  (``test_control_discretization_equals_expm_of_augmented_matrix``) compares this
+  structured path with ``scipy.linalg.expm(A(w) dt)`` of the full augmented-state
+  matrix :meth:`~inserr.model.ErrorModel.matrix`, not with python-control; the
+  python-control path is compared in the same test with ``scipy.linalg.expm`` of
+  A bordered by a zero input row and column.
 """
 
 from __future__ import annotations
@@ -36,16 +45,9 @@ DT_QUANTUM = 1e-9
 MAX_CACHE = 8192
 #: Largest rotation per step (rad) for the structured (quadrature) path.
 MAX_TURN_PER_STEP = 0.5
-
-
-def quantize_omega(omega_n: np.ndarray) -> np.ndarray:
-    """Angular velocities rounded to :data:`OMEGA_QUANTUM` (rad/s), any shape (..., 3)."""
-    return np.round(np.asarray(omega_n, dtype=float) / OMEGA_QUANTUM) * OMEGA_QUANTUM
-
-
-def quantize_dt(dt) -> np.ndarray:
-    """Durations rounded to :data:`DT_QUANTUM` (s)."""
-    return np.round(np.asarray(dt, dtype=float) / DT_QUANTUM) * DT_QUANTUM
+#: Stop pieces shorter than this (s) also take the structured path: the integrand then
+#: varies only at the Schuler and Earth rates (|F| h < 0.1), far inside the rule's range.
+MAX_STRUCTURED_STOP = 60.0
 
 
 class Discretizer:
@@ -54,8 +56,10 @@ class Discretizer:
     Parameters
     ----------
     model : ErrorModel
+        The error model; its constants and layout fix every discretization.
     q : ndarray (12, 12), optional
-        Noise power spectral density (``model.noise_intensity(...)``); needed only
+        Diagonal noise power spectral density (``model.noise_intensity(...)``;
+        ``G sqrt(q)`` is taken elementwise, so it must be diagonal); needed only
         for :meth:`noise`.
     """
 
@@ -69,7 +73,22 @@ class Discretizer:
         self._lock = threading.RLock()
 
     def key(self, omega_n: np.ndarray, dt: float) -> tuple:
-        """Cache key; ``w`` is ignored when the model has no rotating states."""
+        """Cache key of a segment: quantized ``w`` and ``dt`` as integers.
+
+        Parameters
+        ----------
+        omega_n : (3,) array, rad/s
+            Angular velocity of the IMU frame relative to n, resolved in ENU;
+            ignored (key 0) when the model has no rotating states.
+        dt : float
+            Segment duration, s.
+
+        Returns
+        -------
+        tuple of int
+            ``(w_E, w_N, w_U, dt)`` in units of :data:`OMEGA_QUANTUM` and
+            :data:`DT_QUANTUM`.
+        """
         k_dt = int(np.round(dt / DT_QUANTUM))
         if not self.model.layout.rotating:
             return (0, 0, 0, k_dt)
@@ -81,14 +100,33 @@ class Discretizer:
         return np.array(key[:3], dtype=float) * OMEGA_QUANTUM, key[3] * DT_QUANTUM
 
     def transition(self, omega_n: np.ndarray, dt: float) -> np.ndarray:
-        """``Phi = expm(A(w) dt)``, cached: python-control ``sample_system`` (ZOH) for stops
-        and long turns, the structured evaluation for short turning sub-steps."""
+        """Transition matrix ``Phi = expm(A(w) dt)`` of one segment, cached.
+
+        Stops, long turns and non-rotating models go through python-control
+        ``sample_system`` (ZOH); short turning sub-steps through the structured
+        evaluation (see the module docstring).
+
+        Parameters
+        ----------
+        omega_n : (3,) array, rad/s
+            Angular velocity of the IMU frame relative to n, resolved in ENU,
+            constant over the segment.
+        dt : float
+            Segment duration, s.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            ``Phi`` for the quantized ``(w, dt)``; the cached array itself (do not modify).
+        """
         with self._lock:
             return self._transition(omega_n, dt)
 
     def _transition(self, omega_n: np.ndarray, dt: float) -> np.ndarray:
         key = self.key(omega_n, dt)
         phi = self._phi.get(key)
+        if phi is not None:
+            self._phi[key] = self._phi.pop(key)  # most recently used last, as in transitions()
         if phi is None and self._use_structured(key):
             w, h = self._unkey(key)
             phi = self._structured(w[None, :], h)[0]
@@ -105,7 +143,26 @@ class Discretizer:
         return phi
 
     def noise(self, omega_n: np.ndarray, dt: float) -> np.ndarray:
-        """Discrete process-noise covariance ``Qd(w, dt)`` by Van Loan, cached."""
+        """Discrete process-noise covariance ``Qd(w, dt)`` by Van Loan, cached.
+
+        Parameters
+        ----------
+        omega_n : (3,) array, rad/s
+            Angular velocity of the IMU frame relative to n, resolved in ENU.
+        dt : float
+            Segment duration, s.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            ``int_0^dt expm(A s) G Q G^T expm(A s)^T ds``, symmetrised, in the
+            state units squared (the cached array itself).
+
+        Raises
+        ------
+        ValueError
+            If the discretizer was built without ``q``.
+        """
         with self._lock:
             return self._noise(omega_n, dt)
 
@@ -124,16 +181,28 @@ class Discretizer:
                 g = self.model.noise_input() @ np.sqrt(self.q)
                 _, qd = van_loan_discretization(self.model.matrix(w), g, h)
                 qd = 0.5 * (qd + qd.T)
-            self._qd[key] = qd
+            _bounded_put(self._qd, key, qd)
         return qd
 
     def transitions(self, omegas: np.ndarray, dts: np.ndarray) -> list[np.ndarray]:
-        """``Phi`` for many segments at once, as a list of (n, n) arrays.
+        """Transition matrices ``Phi`` of many segments at once.
 
         Cache hits are served from the cache. Stops and long turns (the segments of
         an indexing scheme) go through python-control (:meth:`transition`); short
         turning sub-steps (continuous motion) through :meth:`_structured`, which
         evaluates the same matrix exponential from its block structure, vectorised.
+
+        Parameters
+        ----------
+        omegas : (K, 3) array, rad/s
+            Angular velocities of the IMU frame relative to n, resolved in ENU.
+        dts : (K,) array, s
+            Segment durations.
+
+        Returns
+        -------
+        list of ndarray, each (n, n)
+            ``Phi`` per segment, in input order (cached arrays; do not modify).
         """
         with self._lock:
             return self._transitions(omegas, dts)
@@ -165,10 +234,19 @@ class Discretizer:
         return [self._phi[k] if k in self._phi else self._transition(*self._unkey(k)) for k in keys]
 
     def _use_structured(self, key: tuple) -> bool:
-        """Short turning sub-steps take the structured path; stops and long turns python-control."""
+        """Short sub-steps take the structured path; stops and long turns python-control.
+
+        Short means a turning sub-step of at most :data:`MAX_TURN_PER_STEP` rad, or a
+        piece of a stop shorter than :data:`MAX_STRUCTURED_STOP` s: where a stop ends
+        between two output times, its remainder has a length that differs from cycle
+        to cycle (e.g. the Ts + 2/w stops of the modified four-position scheme), and
+        one python-control call per remainder used to dominate the run time.
+        """
         w, h = self._unkey(key)
         turn = float(np.linalg.norm(w)) * h
-        return self.model.layout.rotating and 0.0 < turn <= MAX_TURN_PER_STEP
+        if not self.model.layout.rotating:
+            return False
+        return 0.0 < turn <= MAX_TURN_PER_STEP or (turn == 0.0 and 0.0 < h < MAX_STRUCTURED_STOP)
 
     def _structured(self, omegas: np.ndarray, h: float) -> np.ndarray:
         """``expm(A(w) h)`` for many ``w`` from the block structure of A (vectorised).
@@ -179,7 +257,9 @@ class Discretizer:
         left, ``Gamma = int_0^h expm(F (h - s)) B(w) expm(E(w) s) ds``, has an entire
         integrand whose fastest oscillation is ``2 |w|``; an 8-point Gauss-Legendre
         rule integrates it to roundoff for ``|w| h <= 0.5`` (error ~ (2|w|h)^16 / 16!,
-        < 1e-13 relative; ``tests/test_model.py`` checks it against python-control).
+        < 1e-13 relative; ``tests/test_model.py`` checks it against
+        ``scipy.linalg.expm(A(w) h)``; python-control is bypassed here by design, see
+        the module docstring).
         """
         from scipy.linalg import expm
 
@@ -193,7 +273,7 @@ class Discretizer:
         if cached is None:
             f = self.model.nav_matrix
             cached = (expm(f * h), np.array([expm(f * (h - sj)) for sj in s]))
-            self._nav_nodes[key] = cached
+            _bounded_put(self._nav_nodes, key, cached)
         phi_f, phi_nodes = cached
         bx = self.model.coupled_exo(omegas, s)  # (K, J, 9, m): B(w) expm(E(w) s_j)
         # sum_j w_j Phi_F(h - s_j) BX_j as one (9, 9J) @ (9J, m) product per w.
@@ -206,12 +286,16 @@ class Discretizer:
         return out
 
     def _store(self, key: tuple, phi: np.ndarray) -> None:
-        # Bounded cache: continuous motion can produce tens of thousands of distinct
-        # sub-steps; evict the oldest entries rather than grow without limit.
-        if len(self._phi) >= MAX_CACHE:
-            for old in list(self._phi)[: MAX_CACHE // 4]:
-                del self._phi[old]
-        self._phi[key] = phi
+        _bounded_put(self._phi, key, phi)
+
+
+def _bounded_put(cache: dict, key, value) -> None:
+    # Bounded caches: continuous motion can produce tens of thousands of distinct
+    # sub-steps; evict the oldest quarter rather than grow without limit.
+    if len(cache) >= MAX_CACHE:
+        for old in list(cache)[: MAX_CACHE // 4]:
+            del cache[old]
+    cache[key] = value
 
 
 @lru_cache(maxsize=16)
@@ -225,5 +309,18 @@ def discretizer_for(model: ErrorModel, q: np.ndarray | None = None) -> Discretiz
 
     Discretizations depend only on constants, so runs of the same model in one
     process (scheme comparisons, sweeps, repeated analyses) reuse them.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        Hashable (frozen) model; equal models share one discretizer.
+    q : (12, 12) array, optional
+        Diagonal noise PSD (:meth:`ErrorModel.noise_intensity`); None for
+        deterministic runs.
+
+    Returns
+    -------
+    Discretizer
+        Shared (at most 16 kept) and thread-safe.
     """
     return _shared(model, None if q is None else np.ascontiguousarray(q, dtype=float).tobytes())

@@ -39,18 +39,22 @@ class DriftResult:
     t : (M,) s
         Fine output grid of the deterministic run.
     nav : (M, 9)
-        Deterministic navigation errors (psi, dv, dr) with the signs as given.
+        Deterministic navigation errors with the signs as given: psi (rad),
+        dv (m/s), dr (m), ENU.
     attitude : (M, 3) rad
         True attitude error phi = psi + dtheta (E, N tilt; U heading error).
     t_cov : (Mc,) s
         Coarse grid of the random-constant and noise results.
     sources : list of Source
+        The non-zero constant error sources, in the order of the N columns below.
     source_horizontal : (Mc, N, 2) m
         Horizontal position error (E, N) per source, scaled by its magnitude.
     source_heading : (Mc, N) rad
         Heading error per source, scaled by its magnitude.
     noise_cov : dict name -> (Mc, 9, 9)
-        Navigation-error covariance due to each noise source.
+        Navigation-error covariance (rad^2, (m/s)^2, m^2, ENU) due to each noise
+        source (``arw``, ``vrw``, ``gyro_bias_instability``,
+        ``accel_bias_instability``; only the non-zero ones).
     metrics : dict
         Headline numbers (see :func:`headline`).
     """
@@ -90,7 +94,21 @@ class DriftResult:
 
 
 def output_grid(duration: float, step: float) -> np.ndarray:
-    """0, step, 2 step, ..., and the final time (always included), s."""
+    """Output times 0, step, 2 step, ..., and the final time (always included).
+
+    Parameters
+    ----------
+    duration : float
+        Final time, s.
+    step : float
+        Grid step, s.
+
+    Returns
+    -------
+    ndarray, shape (M,)
+        Increasing times, s; ``duration`` is appended when the last multiple of
+        ``step`` falls more than 1 us short of it.
+    """
     n = int(math.floor(duration / step + 1e-9))
     t = np.arange(n + 1) * step
     if duration - t[-1] > 1e-6:
@@ -126,19 +144,24 @@ def analyze_drift(
     Parameters
     ----------
     site : Site
+        Location, Earth model and gravity.
     imu : ImuErrors
+        IMU error budget, SI, IMU frame s (resolved in n with ``timeline.c_sn[0]``).
     init : InitialErrors
+        Initial attitude (rad), velocity (m/s) and position (m) errors, ENU.
     timeline : Timeline
-        IMU attitude history (from a scheme and a vehicle motion).
+        IMU attitude history ``C_s^n(t)`` (from a scheme and a vehicle motion).
     dt_out : float, s
         Output step of the deterministic run.
     dt_cov : float, s
         Output step of the random-constant and covariance results.
     vertical : {"clamped", "free"}
+        Vertical-channel mode of :class:`~inserr.model.ErrorModel`.
 
     Returns
     -------
     DriftResult
+        Time histories and :func:`headline` metrics.
     """
     model = ErrorModel(
         site,
@@ -202,6 +225,16 @@ def headline(res: DriftResult) -> dict:
     unknown sign), ``rms_total_horizontal_error_nmi`` (maximum over the run of the
     RMS including noise), and ``error_budget`` (source -> RMS horizontal error at
     the end, nmi).
+
+    Parameters
+    ----------
+    res : DriftResult
+        A drift result (SI).
+
+    Returns
+    -------
+    dict
+        The keys above; horizontal errors in nmi, heading error in deg, duration in h.
     """
     h = res.horizontal
     rms = res.rms_horizontal

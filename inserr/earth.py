@@ -54,11 +54,22 @@ def radii(lat: float, height: float = 0.0) -> tuple[float, float]:
 
 
 def gravity(lat, height=0.0):
-    """Magnitude of normal gravity (gravitation + centrifugal), m/s^2.
+    """Magnitude of normal gravity (gravitation + centrifugal) on the WGS84 ellipsoid.
 
-    Somigliana's closed formula on the WGS84 ellipsoid with the linear free-air
-    height correction ``(1 - 2 h / a)``. ``lat`` (rad) and ``height`` (m) may be
-    arrays; a float comes back for scalar inputs.
+    Somigliana's closed formula with the linear free-air height correction
+    ``(1 - 2 h / a)``.
+
+    Parameters
+    ----------
+    lat : float or array_like
+        Geodetic latitude, rad.
+    height : float or array_like
+        Height above the ellipsoid, m; broadcasts against ``lat``.
+
+    Returns
+    -------
+    float or ndarray
+        Normal gravity, m/s^2 (a float for scalar inputs).
     """
     s2 = np.sin(lat) ** 2
     g = (
@@ -87,6 +98,14 @@ class Site:
         sqrt(R_M R_N) (a locally spherical Earth: the textbook Schuler and
         Foucault formulas hold exactly). Default False: the ellipsoid, whose
         east and north Schuler frequencies differ by about 0.2 %.
+
+    Attributes
+    ----------
+    r_m, r_n : float
+        Meridian and prime-vertical radii of curvature plus height, m (both the
+        Gaussian mean radius when ``spherical``); derived, not arguments.
+    g : float
+        Normal gravity at the site, m/s^2 (:func:`gravity`); derived.
     """
 
     lat: float
@@ -112,7 +131,23 @@ class Site:
     def from_degrees(
         cls, lat_deg: float, lon_deg: float = 0.0, height: float = 0.0, spherical: bool = False
     ) -> Site:
-        """Build a site from latitude and longitude in degrees."""
+        """Build a site from latitude and longitude in degrees.
+
+        Parameters
+        ----------
+        lat_deg : float
+            Geodetic latitude, deg.
+        lon_deg : float
+            Longitude, deg.
+        height : float
+            Height above the WGS84 ellipsoid, m.
+        spherical : bool
+            Locally spherical Earth (see the class parameters).
+
+        Returns
+        -------
+        Site
+        """
         return cls(math.radians(lat_deg), math.radians(lon_deg), height, spherical)
 
     @property

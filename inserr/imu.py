@@ -36,7 +36,21 @@ MISALIGNMENT_INDEX = {
 
 
 def error_matrix(scale_factor: np.ndarray, misalignment: np.ndarray) -> np.ndarray:
-    """``K = S + M`` from 3 scale-factor errors and 6 misalignments (:data:`MISALIGNMENTS`)."""
+    """Sensor error matrix ``K = S + M`` from scale-factor errors and misalignments.
+
+    Parameters
+    ----------
+    scale_factor : (3,) array
+        Scale-factor errors of the x, y, z sensors, dimensionless (the diagonal S).
+    misalignment : (6,) array
+        Misalignments, rad (dimensionless entries of K), in the order of
+        :data:`MISALIGNMENTS`: ``M[x, y] = Mxy`` is the x sensor's sensitivity to y.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``K``, IMU frame s, dimensionless.
+    """
     k = np.diag(np.asarray(scale_factor, dtype=float))
     for value, name in zip(np.asarray(misalignment, dtype=float), MISALIGNMENTS, strict=True):
         k[MISALIGNMENT_INDEX[name]] = value
@@ -61,9 +75,13 @@ class ImuErrors:
     Parameters
     ----------
     gyro_bias : (3,) rad/s
+        Constant gyro bias per IMU axis (a scalar is used for all three).
     accel_bias : (3,) m/s^2
+        Constant accelerometer bias per IMU axis.
     gyro_scale_factor, accel_scale_factor : (3,) dimensionless
-    gyro_misalignment, accel_misalignment : (6,) rad, order ``xy, xz, yx, yz, zx, zy``
+        Scale-factor errors per IMU axis (diagonal of K).
+    gyro_misalignment, accel_misalignment : (6,) rad
+        Misalignments (off-diagonal of K), order ``xy, xz, yx, yz, zx, zy``.
     arw : float, rad/sqrt(s)
         Gyro angle random walk (white rate noise, same on the three axes).
     vrw : float, m/s/sqrt(s)
@@ -110,7 +128,18 @@ class ImuErrors:
         for name in ("arw", "vrw", "gyro_bias_instability", "accel_bias_instability"):
             v = float(getattr(self, name))
             if not math.isfinite(v) or v < 0:
-                raise InputError(name, f"must be a finite value >= 0, got {v!r}")
+                what = "negative" if v < 0 else "not finite"
+                example = {
+                    "arw": "0.001 deg/sqrt(h)",
+                    "vrw": "10 ug/sqrt(Hz)",
+                    "gyro_bias_instability": "0.005 deg/h",
+                    "accel_bias_instability": "10 ug",
+                }[name]
+                raise InputError(
+                    name,
+                    f"a 1-sigma magnitude must be finite and >= 0; this one is {what}",
+                    f"give its magnitude, e.g. {example}",
+                )
             object.__setattr__(self, name, v)
         for name in ("gyro_correlation_time", "accel_correlation_time"):
             v = float(getattr(self, name))
@@ -144,7 +173,18 @@ class ImuErrors:
         return self.gyro_bias_instability > 0 or self.accel_bias_instability > 0
 
     def replace(self, **changes) -> ImuErrors:
-        """A copy with some fields changed (``dataclasses.replace``)."""
+        """A copy with some fields changed (``dataclasses.replace``).
+
+        Parameters
+        ----------
+        **changes
+            Field names and new values, SI units as in the class parameters.
+
+        Returns
+        -------
+        ImuErrors
+            The validated copy.
+        """
         return replace(self, **changes)
 
     def without_noise(self) -> ImuErrors:
@@ -154,7 +194,18 @@ class ImuErrors:
         )
 
     def scaled(self, factor: float) -> ImuErrors:
-        """Every error (not correlation times) multiplied by ``factor``."""
+        """A copy with every error (not the correlation times) multiplied by ``factor``.
+
+        Parameters
+        ----------
+        factor : float
+            Dimensionless multiplier (>= 0 keeps the noise terms valid).
+
+        Returns
+        -------
+        ImuErrors
+            The scaled copy.
+        """
         kw = {}
         for f in fields(self):
             if f.name.endswith("correlation_time"):

@@ -57,6 +57,17 @@ def child_seed(seed: np.random.SeedSequence, i: int) -> np.random.SeedSequence:
     ``SeedSequence.spawn`` counts the children it has handed out, so spawning twice
     from one object gives different streams; deriving the child from the spawn key
     keeps a run reproducible however often its seed object is reused.
+
+    Parameters
+    ----------
+    seed : numpy.random.SeedSequence
+        Parent seed of the run.
+    i : int
+        Index of the child (position in :data:`STREAMS`).
+
+    Returns
+    -------
+    numpy.random.SeedSequence
     """
     return np.random.SeedSequence(
         seed.entropy, spawn_key=(*seed.spawn_key, i), pool_size=seed.pool_size
@@ -76,14 +87,16 @@ def draw_constants(
     Parameters
     ----------
     imu : ImuErrors
-        The budget (SI); its magnitudes are the 1 sigma of the draw.
+        The budget (SI, IMU frame s); its magnitudes are the 1 sigma of the draw.
     init : InitialErrors
-        Initial errors, same reading.
+        Initial errors (rad, m/s, m, ENU), same reading.
     rng : numpy.random.Generator
+        Source of the standard normal numbers.
 
     Returns
     -------
     (ImuErrors, InitialErrors)
+        The drawn budget (same units and frames) and initial errors.
     """
 
     def scale(v: np.ndarray) -> np.ndarray:
@@ -109,7 +122,7 @@ class Injector:
     imu : ImuErrors
         Errors of this run (SI, IMU frame). Noise and bias instability are drawn
         only if ``noise`` is True.
-    seed : numpy SeedSequence, optional
+    seed : numpy.random.SeedSequence, optional
         Entropy of this run's random streams (required when ``noise`` is True and
         the budget has a random part).
     noise : bool
@@ -165,21 +178,21 @@ class Injector:
     def apply(
         self, gyro: np.ndarray, accel: np.ndarray, dt: float
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Measured increments from ideal ones.
+        """Measured increments from ideal ones: scale factors, misalignments, biases, noise.
 
         Parameters
         ----------
-        gyro : (n, 3) rad
-            Ideal angle increments, IMU frame.
-        accel : (n, 3) m/s
-            Ideal velocity increments (integrated specific force), IMU frame.
-        dt : float, s
-            Sample interval.
+        gyro : (n, 3) array
+            Ideal angle increments, rad, IMU frame s.
+        accel : (n, 3) array
+            Ideal velocity increments (integrated specific force), m/s, IMU frame s.
+        dt : float
+            Sample interval, s.
 
         Returns
         -------
-        gyro, accel : (n, 3)
-            Measured increments, IMU frame.
+        gyro, accel : (n, 3) ndarray
+            Measured increments (rad, m/s), IMU frame s.
         """
         n = len(gyro)
         imu = self.imu
@@ -200,11 +213,14 @@ class InitialState:
 
     Attributes
     ----------
-    lat, lon : float, rad
-    height : float, m
-    velocity : (3,) m/s, ENU
-    c_sn : (3, 3)
-        Computed IMU-to-ENU DCM.
+    lat, lon : float
+        Computed geodetic latitude and longitude, rad.
+    height : float
+        Computed height above the WGS84 ellipsoid, m.
+    velocity : (3,) ndarray
+        Computed velocity, m/s, ENU.
+    c_sn : (3, 3) ndarray
+        Computed IMU-to-ENU DCM ``C_s^n``.
     """
 
     lat: float
@@ -215,7 +231,20 @@ class InitialState:
 
 
 def perturbed_dcm(c_sn: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """``expm(-[phi x]) C_s^n``: the computed DCM for a true attitude error ``phi`` (rad, ENU)."""
+    """Computed DCM ``expm(-[phi x]) C_s^n`` for a true attitude error ``phi``.
+
+    Parameters
+    ----------
+    c_sn : (3, 3) array
+        True ``C_s^n`` (IMU frame s to ENU).
+    phi : (3,) array
+        Attitude error, rad, ENU (computed minus true: E, N tilts, U heading error).
+
+    Returns
+    -------
+    (3, 3) ndarray
+        Computed ``C_s^n``.
+    """
     phi = np.asarray(phi, dtype=float)
     angle = float(np.linalg.norm(phi))
     if angle == 0.0:
@@ -226,10 +255,25 @@ def perturbed_dcm(c_sn: np.ndarray, phi: np.ndarray) -> np.ndarray:
 def initial_state(
     site: Site, c_sn0: np.ndarray, init: InitialErrors, vertical: str = "clamped"
 ) -> InitialState:
-    """The computed initial PVA for true attitude ``c_sn0`` at ``site`` with errors ``init``.
+    """The computed initial position, velocity and attitude of an IMU at rest with errors.
 
     See the module notes for the definitions; ``vertical="clamped"`` drops the
     vertical velocity and position errors (height is aided).
+
+    Parameters
+    ----------
+    site : Site
+        True position (lat, lon rad; height m); the vehicle is at rest.
+    c_sn0 : (3, 3) array
+        True initial ``C_s^n`` (IMU frame s to ENU).
+    init : InitialErrors
+        Attitude (rad), velocity (m/s) and position (m) errors, ENU, computed minus true.
+    vertical : {"clamped", "free"}
+        Vertical-channel mode.
+
+    Returns
+    -------
+    InitialState
     """
     dv = np.array(init.velocity, dtype=float)
     dr = np.array(init.position, dtype=float)
@@ -246,9 +290,23 @@ def initial_state(
 
 
 def position_error(site: Site, lat: np.ndarray, lon: np.ndarray, height: np.ndarray) -> np.ndarray:
-    """Position error (m, ENU, computed minus true) of computed lat, lon (rad) and height (m).
+    """Position error, ENU, computed minus true, of a computed latitude, longitude and height.
 
     Inverse of the mapping in :func:`initial_state` (same radii at the true site).
+
+    Parameters
+    ----------
+    site : Site
+        True position and radii of curvature.
+    lat, lon : float or array
+        Computed geodetic latitude and longitude, rad.
+    height : float or array
+        Computed height, m.
+
+    Returns
+    -------
+    (..., 3) ndarray
+        ``[dr_E, dr_N, dr_U]``, m (longitude difference wrapped to [-pi, pi)).
     """
     out = np.empty(np.shape(lat) + (3,))
     # Wrap the longitude difference so a site near +-180 deg gives small errors.

@@ -148,13 +148,35 @@ class TwoAxisTable:
             )
 
     def attitude(self, outer: float, inner: float) -> np.ndarray:
-        """IMU attitude ``C_s^n`` (3x3) at gimbal angles ``outer``, ``inner`` (rad)."""
+        """IMU attitude ``C_s^n = rot(a_out, outer) @ C0 @ rot(a_in, inner)``.
+
+        Parameters
+        ----------
+        outer, inner : float
+            Gimbal angles, rad, right hand about the outer (ENU) and inner (IMU) axes.
+
+        Returns
+        -------
+        ndarray, shape (3, 3)
+            ``C_s^n`` (IMU components to ENU components).
+        """
         return (
             rot_axis(self.outer_axis, outer) @ self.zero_attitude @ rot_axis(self.inner_axis, inner)
         )
 
     def inner_axis_nav(self, outer: float, inner: float) -> np.ndarray:
-        """Inner axis in ENU at the given gimbal angles (rad), unit vector."""
+        """Direction of the inner axis in ENU at the given gimbal angles.
+
+        Parameters
+        ----------
+        outer, inner : float
+            Gimbal angles, rad.
+
+        Returns
+        -------
+        ndarray, shape (3,)
+            Unit vector, ENU components.
+        """
         return self.attitude(outer, inner) @ self.inner_axis
 
     def move_time(self, start: tuple[float, float], end: tuple[float, float]) -> float:
@@ -163,6 +185,16 @@ class TwoAxisTable:
         Each gimbal takes the shorter way round (the table is assumed to have slip
         rings); a move that changes nothing costs nothing, otherwise the settling time
         is added once.
+
+        Parameters
+        ----------
+        start, end : (float, float)
+            ``(outer, inner)`` gimbal angles, rad.
+
+        Returns
+        -------
+        float
+            Indexing time, s: ``(|d outer| + |d inner|) / rate + settle``.
         """
         travel = sum(abs(_wrap(e - s)) for s, e in zip(start, end, strict=True))
         if travel < 1e-12:
@@ -257,7 +289,17 @@ class PositionSet:
         return self.dwell_time + self.indexing_time
 
     def with_dwell(self, dwell: float) -> PositionSet:
-        """A copy with every stop's dwell set to ``dwell`` (s)."""
+        """A copy with every stop's dwell set to ``dwell``.
+
+        Parameters
+        ----------
+        dwell : float
+            Dwell per stop, s, > 0.
+
+        Returns
+        -------
+        PositionSet
+        """
         return PositionSet(
             self.name,
             self.table,
@@ -265,7 +307,14 @@ class PositionSet:
         )
 
     def describe(self) -> list[dict[str, Any]]:
-        """Per-stop summary: name, gimbal angles (deg), dwell (s), IMU axis pointing up."""
+        """Per-stop summary: name, gimbal angles (deg), dwell (s), IMU axis pointing up.
+
+        Returns
+        -------
+        list of dict
+            Keys ``name``, ``outer_deg``, ``inner_deg``, ``dwell_s``, ``up_axis``
+            (:func:`up_axis_label`).
+        """
         out = []
         for p, c in zip(self.positions, self.attitudes, strict=True):
             out.append(
@@ -285,6 +334,16 @@ def up_axis_label(c_sn: np.ndarray) -> str:
 
     The up direction in IMU components is the third row of ``C_s^n``; when no axis is
     within 1 deg of it the components are given instead.
+
+    Parameters
+    ----------
+    c_sn : (3, 3) array
+        IMU-to-ENU DCM ``C_s^n``.
+
+    Returns
+    -------
+    str
+        ``"+x"`` ... ``"-z"``, or ``"(ux, uy, uz)"`` (up in IMU components).
     """
     up_s = np.asarray(c_sn)[2, :]
     k = int(np.argmax(np.abs(up_s)))
@@ -311,6 +370,11 @@ def azimuth_table(
     settle : float
         Settling time per move, s.
 
+    Returns
+    -------
+    TwoAxisTable
+        Outer axis = ENU up; inner axis ``(cos a, sin a, 0)`` in IMU components.
+
     Notes
     -----
     At zero gimbal angles the IMU frame is ENU (P1's p1: s = ENU).
@@ -332,6 +396,17 @@ def trunnion_table(rate: float = DEFAULT_RATE, settle: float = 0.0) -> TwoAxisTa
     Unlike an azimuth table, every IMU axis can be pointed up, which the accelerometer
     calibration needs (on an azimuth table the up direction stays in the plane normal
     to the inner axis, so one accelerometer input direction is never excited).
+
+    Parameters
+    ----------
+    rate : float
+        Indexing rate, rad/s.
+    settle : float
+        Settling time per move, s.
+
+    Returns
+    -------
+    TwoAxisTable
     """
     return TwoAxisTable(
         outer_axis=np.array(NAV_AXES["east"]),
@@ -369,6 +444,11 @@ def offaxis_four_position(
         Indexing rate, rad/s.
     settle : float
         Settling time per move, s.
+
+    Returns
+    -------
+    PositionSet
+        Four stops on :func:`azimuth_table` with :data:`P1_INNER_AXIS_ANGLE`.
     """
     table = azimuth_table(P1_INNER_AXIS_ANGLE, rate, settle)
     angles = [(0.0, 0.0), (0.0, 180.0), (180.0, 180.0), (180.0, 360.0)]
@@ -392,6 +472,11 @@ def six_position(
         Indexing rate, rad/s.
     settle : float
         Settling time per move, s.
+
+    Returns
+    -------
+    PositionSet
+        Six stops on :func:`trunnion_table`.
     """
     table = trunnion_table(rate, settle)
     angles = [(0.0, 0.0), (180.0, 0.0), (270.0, 0.0), (270.0, 90.0), (90.0, 90.0), (90.0, 0.0)]
@@ -408,7 +493,28 @@ BUILTIN_SETS = {
 def builtin_set(
     name: str, dwell: float = DEFAULT_DWELL, rate: float = DEFAULT_RATE, settle: float = 0.0
 ) -> PositionSet:
-    """A built-in position set by name (``six-position``, ``offaxis-four-position``)."""
+    """A built-in position set by name (``six-position``, ``offaxis-four-position``).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`BUILTIN_SETS`.
+    dwell : float
+        Dwell per position, s.
+    rate : float
+        Indexing rate, rad/s.
+    settle : float
+        Settling time per move, s.
+
+    Returns
+    -------
+    PositionSet
+
+    Raises
+    ------
+    InputError
+        For an unknown name.
+    """
     if name not in BUILTIN_SETS:
         raise InputError(
             "--method",
@@ -474,6 +580,12 @@ def position_set_from_dict(
         Indexing rate, rad/s, when ``table.rate`` is absent.
     name : str
         Label used when the file gives no ``name``.
+
+    Returns
+    -------
+    PositionSet
+        Angles in rad, dwells in s; the table's zero attitude from ``heading``,
+        ``pitch``, ``roll`` via :func:`~inserr.rotations.body_to_nav`.
 
     Raises
     ------
@@ -565,6 +677,11 @@ def load_position_set(
     field_name : str
         Name used in error messages about the file itself.
 
+    Returns
+    -------
+    PositionSet
+        Named after the file stem unless the file gives a ``name``.
+
     Raises
     ------
     InputError
@@ -575,6 +692,10 @@ def load_position_set(
         text = p.read_text(encoding="utf-8")
     except OSError as exc:
         raise InputError(field_name, f"cannot read {str(p)!r}: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise InputError(
+            field_name, f"{p.name} is not a UTF-8 text file", "save it as UTF-8 TOML"
+        ) from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -77,6 +77,17 @@ class Layout:
         Gyro and accelerometer ``K = S + M`` matrices resolved in n (18 states).
     bias_instability : bool
         Gauss-Markov gyro and accelerometer biases resolved in n (6 states).
+
+    Attributes
+    ----------
+    names : tuple of str
+        State names in order: the nine :data:`NAV_STATES` (psi rad, dv m/s, dr m,
+        ENU), then ``eps_*`` (rad/s) and ``nabla_*`` (m/s^2), ``kg_**`` and ``ka_**``
+        (dimensionless, row-major ``vec(K^n)``, ENU row then ENU column), ``bg_*``
+        (rad/s) and ``ba_*`` (m/s^2), as carried.
+    slices : dict of str to slice
+        Where each block lives: ``psi``, ``dv``, ``dr``, ``nav`` and the carried
+        ones of ``eps``, ``nabla``, ``kg``, ``ka``, ``bg``, ``ba``; also ``layout[key]``.
     """
 
     bias: bool = True
@@ -163,7 +174,11 @@ class ErrorModel:
     # --- continuous-time matrices ---------------------------------------------
     @cached_property
     def nav_matrix(self) -> np.ndarray:
-        """The 9x9 navigation-error block F (psi, dv, dr), independent of the IMU attitude."""
+        """The 9x9 navigation-error block F of ``x' = F x`` (psi, dv, dr; ENU, SI).
+
+        Independent of the IMU attitude; with ``vertical="clamped"`` the dv_U and dr_U
+        rows and columns are zero.
+        """
         s = self.site
         om = s.earth_rate_n
         g = s.g
@@ -191,6 +206,7 @@ class ErrorModel:
         Returns
         -------
         ndarray, shape (n, n)
+            ``A(w)`` of ``x' = A(w) x`` for the state order of :attr:`Layout.names`.
         """
         lay = self.layout
         w = np.zeros(3) if omega_n is None else np.asarray(omega_n, dtype=float)
@@ -229,12 +245,15 @@ class ErrorModel:
 
         Parameters
         ----------
-        omega_n : (K, 3) rad/s
-        s : (J,) s
+        omega_n : (K, 3) or (3,) rad/s
+            Angular velocities of the IMU frame relative to n, resolved in ENU.
+        s : (J,) or float, s
+            Elapsed times.
 
         Returns
         -------
-        ndarray, shape (K, J, m, m) with m = n - 9.
+        ndarray, shape (K, J, m, m) with m = n - 9
+            Transition of the exo states over each ``s`` for each ``w``.
         """
         lay = self.layout
         w = np.asarray(omega_n, dtype=float).reshape(-1, 3)
@@ -269,12 +288,16 @@ class ErrorModel:
 
         Parameters
         ----------
-        omega_n : (K, 3) rad/s
-        s : (J,) s
+        omega_n : (K, 3) or (3,) rad/s
+            Angular velocities of the IMU frame relative to n, resolved in ENU.
+        s : (J,) or float, s
+            Elapsed times.
 
         Returns
         -------
-        ndarray, shape (K, J, 9, m)
+        ndarray, shape (K, J, 9, m) with m = n - 9
+            Rows psi, dv, dr (dr rows zero; dv_U rows zero when clamped); columns
+            the exo states.
         """
         lay = self.layout
         w = np.asarray(omega_n, dtype=float).reshape(-1, 3)
@@ -316,11 +339,17 @@ class ErrorModel:
         return np.eye(3) + np.sin(ang) * kx + (1.0 - np.cos(ang)) * (kx @ kx)
 
     def noise_input(self) -> np.ndarray:
-        """Unit-intensity white-noise input matrix G (n x 12).
+        """Unit-intensity white-noise input matrix G of ``x' = A x + G w``.
 
         Columns: gyro white rate noise (3), accelerometer white noise (3),
         Gauss-Markov gyro driving noise (3), Gauss-Markov accel driving noise (3),
         all resolved in n (they are isotropic, so the IMU attitude does not matter).
+
+        Returns
+        -------
+        ndarray, shape (n, 12)
+            ``-I`` from gyro noise to psi, ``+I`` from accelerometer noise to dv, ``I``
+            into the Gauss-Markov states if carried; dv_U and dr_U rows zero when clamped.
         """
         lay = self.layout
         g = np.zeros((lay.n, 12))
@@ -341,10 +370,18 @@ class ErrorModel:
         Parameters
         ----------
         arw : float, rad/sqrt(s)
+            Gyro angle random walk; PSD ``arw^2``.
         vrw : float, m/s/sqrt(s)
+            Accelerometer velocity random walk; PSD ``vrw^2``.
         gyro_bi, accel_bi : float
             Steady-state 1 sigma of the Gauss-Markov biases (rad/s, m/s^2); their
             driving PSD is ``2 sigma^2 / tau``.
+
+        Returns
+        -------
+        ndarray, shape (12, 12)
+            ``Q = diag(arw^2 (x3), vrw^2 (x3), 2 gyro_bi^2 / tau_g (x3),
+            2 accel_bi^2 / tau_a (x3))``: rad^2/s, m^2/s^3, rad^2/s^3, m^2/s^5.
         """
         q = np.zeros(12)
         q[0:3] = arw**2
@@ -358,6 +395,16 @@ class ErrorModel:
         """The segment model as a ``control.StateSpace`` (inputs: the 12 noise channels).
 
         Outputs are all states. State names follow :attr:`Layout.names`.
+
+        Parameters
+        ----------
+        omega_n : (3,) array, rad/s, optional
+            Angular velocity of the IMU frame relative to n, resolved in ENU (None = 0).
+
+        Returns
+        -------
+        control.StateSpace
+            ``(A(w), G, I, 0)`` with :meth:`matrix` and :meth:`noise_input`.
         """
         import control
 
@@ -377,6 +424,15 @@ class ErrorModel:
 
         Bias-type states resolved in n are mapped to the IMU frame with ``C_n^s``;
         ``K^n`` blocks with ``C_n^s K^n C_s^n``. Navigation states are unchanged.
+
+        Parameters
+        ----------
+        c_sn : (3, 3) array
+            IMU-to-ENU DCM ``C_s^n``.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
         """
         lay = self.layout
         t = np.eye(lay.n)
@@ -395,6 +451,16 @@ class ErrorModel:
         With ``w = 0`` the n-resolved bias states are constant, and the transform
         :meth:`imu_transform` gives the familiar input matrix ``-C_s^n`` from the
         gyro bias to psi and ``+C_s^n`` from the accelerometer bias to dv.
+
+        Parameters
+        ----------
+        c_sn : (3, 3) array
+            IMU-to-ENU DCM ``C_s^n`` of the stop.
+
+        Returns
+        -------
+        control.StateSpace
+            The stop model (``w = 0``) in the coordinates ``T x`` of :meth:`imu_transform`.
         """
         import control
 
@@ -405,7 +471,20 @@ class ErrorModel:
 
 
 def position_angle(site: Site, dr: np.ndarray) -> np.ndarray:
-    """Position-error angle ``dtheta`` (rad, ENU) for position errors ``dr`` (m, (..., 3))."""
+    """Position-error angle ``dtheta = [-dr_N / R_M, dr_E / R_N, dr_E tan(L) / R_N]``.
+
+    Parameters
+    ----------
+    site : Site
+        Supplies latitude L and the radii ``R_M``, ``R_N`` (m).
+    dr : (..., 3) array, m
+        Position errors (E, N, U), computed minus true.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``dtheta``, rad, ENU.
+    """
     dr = np.asarray(dr, dtype=float)
     out = np.empty(dr.shape[:-1] + (3,))
     out[..., 0] = -dr[..., 1] / site.r_m
@@ -415,7 +494,21 @@ def position_angle(site: Site, dr: np.ndarray) -> np.ndarray:
 
 
 def attitude_error(site: Site, nav: np.ndarray) -> np.ndarray:
-    """True attitude error ``phi = psi + dtheta`` (rad, ENU) from navigation states (..., 9)."""
+    """True attitude error ``phi = psi + dtheta`` from navigation states.
+
+    Parameters
+    ----------
+    site : Site
+    nav : (..., 9) array
+        Navigation states (psi rad, dv m/s, dr m; ENU), or any array whose last
+        axis starts with them.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``phi``, rad, ENU: E and N tilts, U heading error (positive = indicated
+        heading too large).
+    """
     nav = np.asarray(nav, dtype=float)
     return nav[..., PSI] + position_angle(site, nav[..., DR])
 
@@ -454,6 +547,21 @@ def modes(model: ErrorModel) -> Modes:
     The Schuler-band eigenvalues are the two pairs with ``|Im| > 1e-4 rad/s``
     (the Schuler rate is 1.24e-3 rad/s, the Earth rate 7.3e-5 rad/s); the Earth band
     is the pair with ``1e-6 < |Im| <= 1e-4``.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        Only :attr:`ErrorModel.nav_matrix` is used (site and vertical mode).
+
+    Returns
+    -------
+    Modes
+        Periods in s.
+
+    Raises
+    ------
+    RuntimeError
+        If the eigenvalues do not show the expected Schuler and Earth bands.
     """
     ev = np.linalg.eigvals(model.nav_matrix)
     freqs = np.sort(np.unique(np.round(np.abs(ev.imag[ev.imag > 0]), 15)))

@@ -25,13 +25,21 @@ from inserr.rotations import body_to_nav
 
 @dataclass(frozen=True)
 class Motion:
-    """Base class: constant pitch and roll, heading ``heading_at(t)``.
+    """Base class and static motion: constant pitch and roll, heading ``heading_at(t)``.
 
     Parameters
     ----------
     heading : float, rad
-        Initial heading (clockwise from north).
-    pitch, roll : float, rad
+        Initial heading of the body y (forward) axis, clockwise from north.
+    pitch : float, rad
+        Pitch about body x, nose up positive; within (-pi/2, pi/2).
+    roll : float, rad
+        Roll about body y, right wing down positive.
+
+    Attributes
+    ----------
+    name : str
+        Short label of the motion kind (class attribute: ``"static"`` here).
     """
 
     heading: float = 0.0
@@ -47,34 +55,92 @@ class Motion:
     name = "static"
 
     def heading_at(self, t: np.ndarray) -> np.ndarray:
-        """Heading (rad) at times ``t`` (s)."""
+        """Heading of the body at given times.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, s, from the start of the run.
+
+        Returns
+        -------
+        ndarray, shape of ``t``
+            Heading, rad, clockwise from north (unwrapped).
+        """
         return np.full(np.shape(t), self.heading, dtype=float)
 
     def heading_rate(self, t: np.ndarray) -> np.ndarray:
-        """Heading rate (rad/s, clockwise positive) at times ``t`` (s)."""
+        """Heading rate of the body at given times.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, s, from the start of the run.
+
+        Returns
+        -------
+        ndarray, shape of ``t``
+            Heading rate, rad/s, clockwise positive.
+        """
         return np.zeros(np.shape(t))
 
     @property
     def tilt(self) -> np.ndarray:
-        """``C_b^n`` at heading 0: every motion here is ``rot_z(-H(t)) @ tilt``."""
+        """``C_b^n`` (3, 3) at heading 0: every motion here is ``rot_z(-H(t)) @ tilt``."""
         return body_to_nav(0.0, self.pitch, self.roll)
 
     def attitude(self, t: np.ndarray) -> np.ndarray:
-        """``C_b^n`` at times ``t`` (s); shape (len(t), 3, 3)."""
+        """Body attitude ``C_b^n`` (body right-front-up to ENU) at given times.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, s, from the start of the run.
+
+        Returns
+        -------
+        ndarray, shape (len(t), 3, 3)
+            ``C_b^n``; a scalar ``t`` counts as one time.
+        """
         t = np.atleast_1d(np.asarray(t, dtype=float))
         return body_to_nav(
             self.heading_at(t), np.full(t.shape, self.pitch), np.full(t.shape, self.roll)
         )
 
     def rate_n(self, t: np.ndarray) -> np.ndarray:
-        """Body angular velocity relative to n, resolved in n (rad/s); (len(t), 3)."""
+        """Body angular velocity relative to n, ``w_nb^n = [0, 0, -heading_rate]``.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, s, from the start of the run.
+
+        Returns
+        -------
+        ndarray, shape (len(t), 3)
+            Angular velocity of b relative to n, resolved in ENU, rad/s.
+        """
         t = np.atleast_1d(np.asarray(t, dtype=float))
         out = np.zeros((len(t), 3))
         out[:, 2] = -self.heading_rate(t)
         return out
 
     def pieces(self, duration: float) -> tuple[np.ndarray, bool]:
-        """Breakpoints in [0, duration] and whether the rate is constant between them."""
+        """Breakpoints of the motion and whether its rate is constant between them.
+
+        Parameters
+        ----------
+        duration : float
+            Length of the run, s.
+
+        Returns
+        -------
+        breaks : ndarray, shape (P,)
+            Increasing times in [0, duration], s, starting at 0 and ending at ``duration``.
+        constant : bool
+            True if the heading rate is constant between consecutive breakpoints (so
+            each piece is one exact constant-rate interval).
+        """
         return np.array([0.0, duration]), True
 
     @property
@@ -83,7 +149,7 @@ class Motion:
         return True
 
     def describe(self) -> str:
-        """One-line human description."""
+        """One-line human description (angles in degrees)."""
         return (
             f"static, heading {math.degrees(self.heading):g} deg, "
             f"pitch {math.degrees(self.pitch):g} deg, "
@@ -98,12 +164,14 @@ Static = Motion
 class YawSwing(Motion):
     """Heading rate ``A cos(2 pi t / T)``: heading ``psi0 + A T / (2 pi) sin(2 pi t / T)``.
 
+    ``psi0`` is the inherited ``heading``; ``pitch`` and ``roll`` as in :class:`Motion`.
+
     Parameters
     ----------
     amplitude : float, rad/s
-        Peak heading rate A.
+        Peak heading rate A (clockwise positive).
     period : float, s
-        Swing period T.
+        Swing period T, > 0.
     """
 
     amplitude: float = 0.0
@@ -117,21 +185,35 @@ class YawSwing(Motion):
             raise InputError("yaw_swing.period", f"must be > 0 s, got {self.period!r}")
 
     def heading_at(self, t):
+        """Heading ``psi0 + A T / (2 pi) sin(2 pi t / T)``.
+
+        Arguments, returns and units as :meth:`Motion.heading_at`.
+        """
         w = 2.0 * math.pi / self.period
         return self.heading + self.amplitude / w * np.sin(w * np.asarray(t, dtype=float))
 
     def heading_rate(self, t):
+        """Heading rate ``A cos(2 pi t / T)``.
+
+        Arguments, returns and units as :meth:`Motion.heading_rate`.
+        """
         w = 2.0 * math.pi / self.period
         return self.amplitude * np.cos(w * np.asarray(t, dtype=float))
 
     def pieces(self, duration):
+        """One piece ``[0, duration]``, constant-rate only when the amplitude is zero.
+
+        Arguments, returns and units as :meth:`Motion.pieces`.
+        """
         return np.array([0.0, duration]), self.amplitude == 0.0
 
     @property
     def is_static(self) -> bool:
+        """True if the amplitude is zero."""
         return self.amplitude == 0.0
 
     def describe(self):
+        """One-line human description (angles in degrees)."""
         return (
             f"yaw swing {math.degrees(self.amplitude):g} deg/s peak, period {self.period:g} s "
             "(heading amplitude "
@@ -147,23 +229,34 @@ class Turn(Motion):
     Parameters
     ----------
     rate : float, rad/s
-        Heading rate, clockwise positive.
+        Heading rate, clockwise positive; ``heading``, ``pitch`` and ``roll`` as in
+        :class:`Motion` (``heading`` is the heading at t = 0).
     """
 
     rate: float = 0.0
     name = "turn"
 
     def heading_at(self, t):
+        """Heading ``heading + rate * t``.
+
+        Arguments, returns and units as :meth:`Motion.heading_at`.
+        """
         return self.heading + self.rate * np.asarray(t, dtype=float)
 
     def heading_rate(self, t):
+        """The constant heading rate.
+
+        Arguments, returns and units as :meth:`Motion.heading_rate`.
+        """
         return np.full(np.shape(t), self.rate, dtype=float)
 
     @property
     def is_static(self) -> bool:
+        """True if the rate is zero."""
         return self.rate == 0.0
 
     def describe(self):
+        """One-line human description (angles in degrees)."""
         return (
             f"turn at {math.degrees(self.rate):g} deg/s "
             f"from heading {math.degrees(self.heading):g} deg"
@@ -176,8 +269,11 @@ class HeadingHistory(Motion):
 
     Parameters
     ----------
-    times : (K,) s, increasing, starting at 0
-    headings : (K,) rad, unwrapped (no 360 deg jumps)
+    times : (K,) s
+        Sample times, K >= 2, strictly increasing, starting at 0.
+    headings : (K,) rad
+        Heading at each sample, clockwise from north, unwrapped (no 360 deg jumps).
+        ``heading`` is set to ``headings[0]``; ``pitch`` and ``roll`` as in :class:`Motion`.
     """
 
     times: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0]))
@@ -201,18 +297,31 @@ class HeadingHistory(Motion):
         object.__setattr__(self, "heading", float(h[0]))
 
     def heading_at(self, t):
+        """Heading linearly interpolated between samples (held at the ends).
+
+        Arguments, returns and units as :meth:`Motion.heading_at`.
+        """
         return np.interp(t, self.times, self.headings)
 
     def heading_rate(self, t):
+        """Heading rate of the sample interval containing each time.
+
+        Arguments, returns and units as :meth:`Motion.heading_rate`.
+        """
         t = np.asarray(t, dtype=float)
         k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2)
         return np.diff(self.headings)[k] / np.diff(self.times)[k]
 
     @property
     def is_static(self) -> bool:
+        """True if every sampled heading equals the first."""
         return bool(np.all(self.headings == self.headings[0]))
 
     def pieces(self, duration):
+        """The sample times inside the run: the rate is constant between them.
+
+        Arguments, returns and units as :meth:`Motion.pieces`.
+        """
         if duration > self.times[-1] + 1e-9:
             raise InputError(
                 "motion.heading_history",
@@ -223,4 +332,5 @@ class HeadingHistory(Motion):
         return np.concatenate([[0.0], inner, [duration]]), True
 
     def describe(self):
+        """One-line human description."""
         return f"heading history of {len(self.times)} samples over {self.times[-1]:g} s"

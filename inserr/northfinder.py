@@ -122,12 +122,31 @@ class Pose:
     def from_degrees(
         cls, lat: float, heading: float, pitch: float = 0.0, roll: float = 0.0, height: float = 0.0
     ) -> Pose:
-        """Build a pose from latitude, heading, pitch and roll in degrees (height in m)."""
+        """Build a pose from angles in degrees.
+
+        Parameters
+        ----------
+        lat, heading, pitch, roll : float
+            deg.
+        height : float
+            m.
+
+        Returns
+        -------
+        Pose
+            Angles in rad.
+        """
         return cls(lat * DEG, heading * DEG, pitch * DEG, roll * DEG, height)
 
     @property
     def gravity(self) -> float:
-        """Normal gravity magnitude at the site, m/s^2."""
+        """Normal gravity magnitude at the site.
+
+        Returns
+        -------
+        float
+            m/s^2.
+        """
         return earth.gravity(self.lat, self.height)
 
 
@@ -200,18 +219,35 @@ class Instrument:
 
     @property
     def samples_per_period(self) -> int:
-        """Number of sensor samples in one filter period."""
+        """Number of sensor samples in one filter period.
+
+        Returns
+        -------
+        int
+        """
         return int(round(self.sample_rate * self.filter_period))
 
     @property
     def gyro_axis(self) -> np.ndarray:
-        """Gyro sensitive axis in the table frame t (unit vector)."""
+        """Gyro sensitive axis in the table frame t.
+
+        Returns
+        -------
+        ndarray (3,)
+            Unit vector.
+        """
         t = self.gyro_tilt
         return np.array([0.0, math.cos(t), math.sin(t)])
 
     @property
     def accel_axis(self) -> np.ndarray:
-        """Accelerometer sensitive axis in the table frame t (unit vector)."""
+        """Accelerometer sensitive axis in the table frame t.
+
+        Returns
+        -------
+        ndarray (3,)
+            Unit vector.
+        """
         p, e = self.accel_azimuth, self.accel_tilt
         return np.array([-math.sin(p) * math.cos(e), math.cos(p) * math.cos(e), math.sin(e)])
 
@@ -265,18 +301,45 @@ class SensorGrade:
                 raise InputError(name, f"must be > 0 s, got {v:g}", "give e.g. 300 s")
 
     def without_noise(self) -> SensorGrade:
-        """The same constant biases with no random errors (for noise-free checks)."""
+        """The same constant biases with no random errors (for noise-free checks).
+
+        Returns
+        -------
+        SensorGrade
+            ARW, VRW and bias instabilities zero; biases (rad/s, m/s^2) kept.
+        """
         return replace(
             self, gyro_arw=0.0, gyro_bias_instability=0.0, accel_vrw=0.0, accel_bias_instability=0.0
         )
 
     def replace(self, **changes) -> SensorGrade:
-        """A copy with some fields changed."""
+        """A copy with some fields changed.
+
+        Parameters
+        ----------
+        **changes
+            Field names and new values, SI units.
+
+        Returns
+        -------
+        SensorGrade
+        """
         return replace(self, **changes)
 
 
 def earth_rate_n(lat: ArrayLike) -> np.ndarray:
-    """Earth rate in ENU, ``Omega [0, cos L, sin L]``, rad/s; broadcasts to (..., 3)."""
+    """Earth rate in ENU, ``Omega [0, cos L, sin L]``.
+
+    Parameters
+    ----------
+    lat : float or array
+        Latitude, rad.
+
+    Returns
+    -------
+    ndarray (..., 3)
+        rad/s.
+    """
     lat = np.asarray(lat, dtype=float)
     return earth.OMEGA_IE * np.stack([np.zeros_like(lat), np.cos(lat), np.sin(lat)], axis=-1)
 
@@ -309,7 +372,19 @@ def body_vectors(
 def coefficients_from_body(w_b: np.ndarray, f_b: np.ndarray, instrument: Instrument) -> np.ndarray:
     """Modulation amplitudes ``[A, B, C, D]`` from body-frame Earth rate and specific force.
 
-    Returns an array (..., 4): A, B in rad/s, C, D in m/s^2 (see the module docstring).
+    Parameters
+    ----------
+    w_b : ndarray (..., 3)
+        Earth rate in the base frame, rad/s.
+    f_b : ndarray (..., 3)
+        Specific force in the base frame, m/s^2.
+    instrument : Instrument
+        Mounting angles (rad).
+
+    Returns
+    -------
+    ndarray (..., 4)
+        A, B in rad/s, C, D in m/s^2 (see the module docstring).
     """
     c1 = math.cos(instrument.gyro_tilt)
     ce = math.cos(instrument.accel_tilt)
@@ -330,7 +405,20 @@ def true_coefficients(pose: Pose, instrument: Instrument, grade: SensorGrade) ->
 
     ``eps'`` and ``nabla'`` hold the constant biases plus the constant projections of
     the up-axis Earth rate, table rate and specific force (see the module docstring).
-    Units rad/s and m/s^2.
+
+    Parameters
+    ----------
+    pose : Pose
+        Truth (rad, m).
+    instrument : Instrument
+        Table rate (rad/s) and mounting angles (rad).
+    grade : SensorGrade
+        Constant biases (rad/s, m/s^2).
+
+    Returns
+    -------
+    ndarray (6,)
+        A, B, eps' in rad/s; C, D, nabla' in m/s^2.
     """
     w_b, f_b = body_vectors(pose.lat, pose.heading, pose.pitch, pose.roll, pose.gravity)
     abcd = coefficients_from_body(w_b, f_b, instrument)
@@ -344,8 +432,20 @@ def coefficient_jacobian(pose: Pose, instrument: Instrument) -> np.ndarray:
 
     Derivatives of ``w^b = R^T rot_z(heading) w^n(lat)`` and ``f^b = R^T [0, 0, g(lat)]``
     with ``R = rot_x(pitch) rot_y(roll)``: ``dR/dpitch = [e_x x] R`` and
-    ``dR/droll = R [e_y x]``. ``dg/dlat`` (Somigliana) is included. Units: rows
-    rad/s or m/s^2, per rad.
+    ``dR/droll = R [e_y x]``. ``dg/dlat`` (Somigliana) is included.
+
+    Parameters
+    ----------
+    pose : Pose
+        Where to differentiate (rad, m).
+    instrument : Instrument
+        Mounting angles (rad).
+
+    Returns
+    -------
+    ndarray (4, 4)
+        Rows A, B (rad/s per rad) and C, D (m/s^2 per rad); columns heading, lat,
+        pitch, roll.
     """
     c_nb = body_to_nav(pose.heading, pose.pitch, pose.roll).T
     r_mat = body_to_nav(0.0, pose.pitch, pose.roll)  # R = rot_x(pitch) rot_y(roll)
@@ -408,8 +508,21 @@ def table_angle_integrals(
     """Exact ``int cos(alpha) dt`` and ``int sin(alpha) dt`` over ``[t0, t0 + dt]``.
 
     Written as ``dt * sinc(rate dt / 2) * cos/sin(alpha at mid-interval)``, which avoids
-    the cancellation of ``(sin a1 - sin a0) / rate`` at low rates. ``t0`` may be an
-    array (s); results in s.
+    the cancellation of ``(sin a1 - sin a0) / rate`` at low rates.
+
+    Parameters
+    ----------
+    instrument : Instrument
+        Table rate, rad/s.
+    t0 : float or array
+        Interval starts, s.
+    dt : float
+        Interval length, s.
+
+    Returns
+    -------
+    int_cos, int_sin : ndarray
+        s, shaped like ``t0``.
     """
     rate = instrument.table_rate
     mid = rate * (np.asarray(t0, dtype=float) + 0.5 * dt)
@@ -431,7 +544,19 @@ def _table_integral_matrices(instrument: Instrument, n: int) -> np.ndarray:
 
 
 def run_seed(seed: int, run: int) -> np.random.SeedSequence:
-    """Seed sequence of Monte Carlo run ``run``: the same numbers however runs are chunked."""
+    """Seed sequence of one Monte Carlo run: the same numbers however runs are chunked.
+
+    Parameters
+    ----------
+    seed : int
+        Master seed, >= 0.
+    run : int
+        Run index, >= 0.
+
+    Returns
+    -------
+    numpy.random.SeedSequence
+    """
     return np.random.SeedSequence(entropy=int(seed), spawn_key=(int(run),))
 
 
@@ -512,7 +637,20 @@ def simulate(
 
 
 def n_filter_periods(instrument: Instrument, duration: float) -> int:
-    """Whole filter periods in ``duration`` (s); raises InputError if fewer than one."""
+    """Whole filter periods in a duration.
+
+    Parameters
+    ----------
+    instrument : Instrument
+        Filter period, s.
+    duration : float
+        s, > 0.
+
+    Returns
+    -------
+    int
+        >= 1; InputError if the duration holds less than one period.
+    """
     d = require_finite(duration, "duration")
     if d <= 0:
         raise InputError("duration", f"must be positive, got {d:g} s", "give a positive duration")
@@ -531,8 +669,20 @@ def mirror_pose(pose: Pose) -> tuple[float, float]:
 
     The gyro only senses the Earth rate's components in the table plane, so the
     Earth-rate vector reflected through that plane, ``w' = w - 2 (w . b_z) b_z``,
-    produces identical outputs. Returns ``(heading, lat)`` of ``w'`` in rad; used to
-    demonstrate the two-fold ambiguity that the hemisphere resolves.
+    produces identical outputs (its component along ``b_z`` only enters the gyro
+    constant ``eps'``, inseparable from the unknown bias); the accelerometer sees the
+    same gravity direction. Used to demonstrate the two-fold ambiguity that only the
+    user's declaration of the hemisphere resolves.
+
+    Parameters
+    ----------
+    pose : Pose
+        Truth (rad).
+
+    Returns
+    -------
+    heading, lat : float
+        Of the mirror solution, rad (heading in [0, 2 pi)).
     """
     c_bn = body_to_nav(pose.heading, pose.pitch, pose.roll)
     w_n = earth_rate_n(pose.lat)

@@ -52,6 +52,20 @@ def bias_instability_psd(sigma: float, tau: float, omega: float) -> float:
     ``S(w) = 2 sigma^2 tau / (1 + w^2 tau^2)``, in units^2 s (the same convention as
     ``ARW^2``: a white process of PSD S has variance S / T when averaged over T).
     Its maximum over ``tau`` is ``sigma^2 / |w|`` at ``tau = 1 / |w|``.
+
+    Parameters
+    ----------
+    sigma : float
+        Steady-state 1 sigma of the process: rad/s (gyro) or m/s^2 (accelerometer).
+    tau : float
+        Correlation time, s.
+    omega : float
+        Angular frequency, rad/s (the table rate).
+
+    Returns
+    -------
+    float
+        PSD in (rad/s)^2 s = rad^2/s, or (m/s^2)^2 s.
     """
     return 2.0 * sigma**2 * tau / (1.0 + (omega * tau) ** 2)
 
@@ -61,12 +75,22 @@ def coefficient_information(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Cumulative Fisher information of the raw samples about ``[A, B, C, D, eps', nabla']``.
 
+    Parameters
+    ----------
+    instrument : Instrument
+        Table rate (rad/s), sample rate (Hz) and filter period (s).
+    grade : SensorGrade
+        White noise: gyro ARW (rad/sqrt(s)) and accelerometer VRW (m/s/sqrt(s)), both > 0.
+    duration : float
+        Record length, s (truncated to whole filter periods).
+
     Returns
     -------
     times : ndarray (n_periods,)
         End of each filter period, s.
     info : ndarray (n_periods, 6, 6)
-        Information of all samples up to ``times[k]``, in 1/(rad/s)^2 and 1/(m/s^2)^2.
+        Information of all samples up to ``times[k]``, in 1/(rad/s)^2 (A, B, eps')
+        and 1/(m/s^2)^2 (C, D, nabla'); gyro and accelerometer blocks do not couple.
     """
     if grade.gyro_arw <= 0 or grade.accel_vrw <= 0:
         raise InputError(
@@ -122,13 +146,16 @@ class Bound:
     Attributes
     ----------
     times : ndarray (n,)
-        s.
+        End of each filter period, s.
     heading, lat, pitch, roll : ndarray (n,)
-        rad; ``lat`` is NaN when latitude is known; +inf where the data do not
-        identify the parameter (e.g. latitude at the equator on a level table).
+        1-sigma bounds, rad (heading of the base's ``b_y`` axis, clockwise from
+        north; pitch and roll of the base b); ``lat`` is NaN when latitude is known;
+        +inf where the data do not identify the parameter (e.g. latitude at the
+        equator on a level table).
     covariance : ndarray (n, p, p)
-        Inverse Fisher information over :attr:`parameters`.
+        Inverse Fisher information over :attr:`parameters` (rad, rad/s, m/s^2).
     parameters : tuple of str
+        Names of the p unknowns, a subset of :data:`PARAMETERS` in that order.
     """
 
     times: np.ndarray
@@ -153,10 +180,15 @@ def crlb(
 
     Parameters
     ----------
-    pose, instrument, grade
-        Truth, geometry and noise (ARW and VRW > 0).
+    pose : Pose
+        Truth: latitude, heading, pitch and roll of the base (rad), height (m).
+    instrument : Instrument
+        Table and sensor geometry (rates rad/s and Hz, mounting angles rad).
+    grade : SensorGrade
+        Noise (ARW rad/sqrt(s) and VRW m/s/sqrt(s), both > 0); the Gauss-Markov
+        terms are used only with ``bias_instability``.
     duration : float
-        s (whole filter periods).
+        Record length, s (truncated to whole filter periods).
     latitude_known : bool
         Drop latitude from the unknowns.
     bias_instability : bool
@@ -166,6 +198,7 @@ def crlb(
     Returns
     -------
     Bound
+        1-sigma bounds (rad) and covariance after each filter period.
     """
     times, info_c = coefficient_information(instrument, grade, duration)
     if bias_instability:

@@ -8,9 +8,11 @@ increments summed over each filter period ``[t_k, t_k + T]``::
     z_a = (1/T) sum(accel increments) = [0, 0, c_k, s_k, 0, 1] x + v_a
     c_k = (1/T) int cos(alpha) dt,  s_k = (1/T) int sin(alpha) dt   (exact)
 
-with ``var(v_g) = ARW^2 / T`` and ``var(v_a) = VRW^2 / T``. The model is linear with
-a data-independent H, so the gain is the same in every Monte Carlo run: one filter
-carries the runs as the columns of its state ``x`` (6 x n_runs) and one covariance.
+with ``var(v_g) = ARW^2 / T`` and ``var(v_a) = VRW^2 / T``. Each Monte Carlo run has
+its own filterpy filter, fed one ``(2, 1)`` measurement column per period as filterpy's
+``(dim_z, 1)`` contract requires (so its residual ``y``, ``S``, likelihood and
+Mahalanobis distance are those of that run). The model is linear with a
+data-independent H, so the covariance is the same in every run.
 
 :func:`solve` then turns the constants into pitch, roll, heading and (unless given)
 latitude, exactly (no small angles); ``docs/tutorials/northfinding.md`` has the algebra.
@@ -38,13 +40,65 @@ PRIOR_SCALE_ACCEL = 10.0
 #: Fixed-point iterations of the latitude-dependent gravity in the unknown-latitude
 #: solution: each one shrinks the error by ~(dg/dL / g) * tilt < 1e-3.
 GRAVITY_ITERATIONS = 6
+#: Hemisphere names a user declares, and the sign of the Earth rate's component along
+#: the table normal that each selects.
+HEMISPHERES = {"north": 1, "south": -1}
+
+
+def hemisphere_sign(hemisphere: int | str) -> int:
+    """The declared hemisphere as the sign the solver uses.
+
+    Parameters
+    ----------
+    hemisphere : {"north", "south", 1, -1}
+        The user's declaration.
+
+    Returns
+    -------
+    int
+        +1 for north, -1 for south.
+    """
+    if isinstance(hemisphere, str) and hemisphere.strip().lower() in HEMISPHERES:
+        return HEMISPHERES[hemisphere.strip().lower()]
+    if not isinstance(hemisphere, str) and hemisphere in (1, -1):
+        return int(hemisphere)
+    raise InputError(
+        "hemisphere",
+        f"must be 'north' (+1) or 'south' (-1), got {hemisphere!r}",
+        "declare the hemisphere the instrument stands in",
+    )
+
+
+def hemisphere_name(sign: int) -> str:
+    """``"north"`` for +1, ``"south"`` for -1 (see :func:`hemisphere_sign`).
+
+    Parameters
+    ----------
+    sign : int
+        +1 or -1.
+
+    Returns
+    -------
+    str
+    """
+    return "north" if hemisphere_sign(sign) > 0 else "south"
 
 
 def measurement_rows(instrument: Instrument, n_periods: int) -> np.ndarray:
-    """Measurement matrices ``H_k`` for filter periods ``k = 0 .. n_periods-1``, (n, 2, 6).
+    """Measurement matrices ``H_k`` of the filter periods ``k = 0 .. n_periods - 1``.
 
-    Rows ``[c_k, s_k, 0, 0, 1, 0]`` and ``[0, 0, c_k, s_k, 0, 1]`` with the period means
-    of ``cos(alpha)`` and ``sin(alpha)`` (dimensionless).
+    Parameters
+    ----------
+    instrument : Instrument
+        Table rate (rad/s) and filter period (s).
+    n_periods : int
+        Number of filter periods.
+
+    Returns
+    -------
+    ndarray (n_periods, 2, 6)
+        Rows ``[c_k, s_k, 0, 0, 1, 0]`` and ``[0, 0, c_k, s_k, 0, 1]`` with ``c_k, s_k``
+        the period means of ``cos(alpha)`` and ``sin(alpha)`` (dimensionless).
     """
     period = instrument.filter_period
     c, s = table_angle_integrals(instrument, np.arange(n_periods) * period, period)
@@ -65,6 +119,13 @@ def period_measurements(data: SensorData, instrument: Instrument) -> np.ndarray:
     here so that ``eps'`` starts near zero (it would otherwise be up to ~0.1 rad/s and
     spoil the conditioning of a diffuse prior).
 
+    Parameters
+    ----------
+    data : SensorData
+        Angle increments (rad) and velocity increments (m/s), (n_runs, n_samples).
+    instrument : Instrument
+        Sample rate (Hz), filter period (s), gyro tilt (rad) and table rate (rad/s).
+
     Returns
     -------
     ndarray (n_periods, 2, n_runs)
@@ -80,13 +141,28 @@ def period_measurements(data: SensorData, instrument: Instrument) -> np.ndarray:
     return np.stack([g.T, a.T], axis=1)
 
 
-def make_filter(instrument: Instrument, grade: SensorGrade, n_runs: int = 1) -> KalmanFilter:
-    """A filterpy ``KalmanFilter`` for the six constants, one state column per run.
+def make_filter(instrument: Instrument, grade: SensorGrade) -> KalmanFilter:
+    """A filterpy ``KalmanFilter`` for the six constants of one run.
 
-    ``F = I``; ``Q`` lets ``eps'`` and ``nabla'`` wander as a random walk with the
-    short-time rate of the Gauss-Markov bias instability, ``2 sigma^2 / tau`` per
-    second (a random walk, not a decaying Gauss-Markov state, because ``eps'`` also
-    holds constant terms that must not decay). ``R = diag(ARW^2, VRW^2) / T``.
+    ``x`` is a (6, 1) column (zero) and ``P`` the diffuse prior. ``F = I``; ``Q`` lets
+    ``eps'`` and ``nabla'`` wander as a random walk with the short-time rate of the
+    Gauss-Markov bias instability, ``2 sigma^2 / tau`` per second (a random walk, not a
+    decaying Gauss-Markov state, because ``eps'`` also holds constant terms that must
+    not decay). ``R = diag(ARW^2, VRW^2) / T``. ``H`` changes every period and is passed
+    to ``update`` (see :func:`measurement_rows`).
+
+    Parameters
+    ----------
+    instrument : Instrument
+        Filter period T (s).
+    grade : SensorGrade
+        The filter's noise model: ARW (rad/sqrt(s)) and VRW (m/s/sqrt(s)), both > 0,
+        bias instabilities (rad/s, m/s^2) and correlation times (s).
+
+    Returns
+    -------
+    filterpy.kalman.KalmanFilter
+        ``dim_x = 6``, ``dim_z = 2``; states in rad/s and m/s^2.
     """
     if grade.gyro_arw <= 0 or grade.accel_vrw <= 0:
         raise InputError(
@@ -96,7 +172,7 @@ def make_filter(instrument: Instrument, grade: SensorGrade, n_runs: int = 1) -> 
         )
     period = instrument.filter_period
     kf = KalmanFilter(dim_x=6, dim_z=2)
-    kf.x = np.zeros((6, n_runs))
+    kf.x = np.zeros((6, 1))
     gyro0 = PRIOR_SCALE_GYRO * earth.OMEGA_IE
     accel0 = PRIOR_SCALE_ACCEL * earth.GAMMA_P
     kf.P = np.diag([gyro0, gyro0, accel0, accel0, gyro0, accel0]) ** 2
@@ -120,7 +196,8 @@ class FilterOutput:
     x : ndarray (n_periods, 6, n_runs)
         ``[A, B, C, D, eps', nabla']`` per run (rad/s, m/s^2).
     P : ndarray (n_periods, 6, 6)
-        Filter covariance (common to all runs).
+        Filter covariance, (rad/s)^2 and (m/s^2)^2 (the same in every run: it does
+        not depend on the data).
     """
 
     times: np.ndarray
@@ -129,26 +206,45 @@ class FilterOutput:
 
 
 def run_filter(z: np.ndarray, instrument: Instrument, grade: SensorGrade) -> FilterOutput:
-    """Run the Kalman filter over period measurements ``z`` (n_periods, 2, n_runs).
+    """Run one Kalman filter per Monte Carlo run over period measurements ``z``.
 
-    ``grade`` sets R and Q (the filter's noise model), independent of how the data
-    were made. ``z`` is passed to filterpy as a (2, n_runs) block together with
-    ``H``: filterpy 2.0.0 skips its own reshape when ``H`` is given, and a 1-D ``z``
-    would then broadcast ``z - H x`` to the wrong shape without an error.
+    Each run gets its own filterpy ``KalmanFilter`` and every update receives that
+    run's measurement as a ``(2, 1)`` column, as filterpy's ``(dim_z, 1)`` contract
+    asks. (Passing all runs as the columns of one ``(2, n_runs)`` block gives the same
+    states, because the gain does not depend on the data, but filterpy's residual,
+    likelihood and Mahalanobis distance assume one column and would be wrong; and
+    filterpy 2.0.0 skips its reshape of ``z`` when ``H`` is given, so a 1-D ``z``
+    would broadcast ``z - H x`` to a wrong shape without an error.) The cost is about
+    30 microseconds per run and period, well below that of simulating the samples.
+
+    Parameters
+    ----------
+    z : ndarray (n_periods, 2, n_runs)
+        Period means from :func:`period_measurements`: gyro rad/s, accelerometer m/s^2.
+    instrument : Instrument
+        The estimator's instrument (table rate rad/s, filter period s).
+    grade : SensorGrade
+        Sets R and Q (the filter's noise model), independent of how the data were made.
+
+    Returns
+    -------
+    FilterOutput
     """
     z = np.asarray(z, dtype=float)
-    if z.ndim != 3 or z.shape[1] != 2:
-        raise InputError("z", f"expected shape (n_periods, 2, n_runs), got {z.shape}")
+    if z.ndim != 3 or z.shape[1] != 2 or z.shape[2] < 1:
+        raise InputError("z", f"expected shape (n_periods, 2, n_runs >= 1), got {z.shape}")
     n_periods, _, n_runs = z.shape
-    kf = make_filter(instrument, grade, n_runs)
     rows = measurement_rows(instrument, n_periods)
     xs = np.empty((n_periods, 6, n_runs))
     ps = np.empty((n_periods, 6, 6))
-    for k in range(n_periods):
-        kf.predict()
-        kf.update(z[k], H=rows[k])
-        xs[k] = kf.x
-        ps[k] = kf.P
+    for run in range(n_runs):
+        kf = make_filter(instrument, grade)
+        for k in range(n_periods):
+            kf.predict()
+            kf.update(z[k, :, run : run + 1], H=rows[k])
+            xs[k, :, run] = kf.x[:, 0]
+            if run == 0:
+                ps[k] = kf.P
     times = (np.arange(n_periods) + 1) * instrument.filter_period
     return FilterOutput(times=times, x=xs, P=ps)
 
@@ -173,12 +269,28 @@ class Solution:
 def level_from_accel(
     c: ArrayLike, d: ArrayLike, g: ArrayLike, instrument: Instrument, model: str = "exact"
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Pitch and roll (rad) from the accelerometer amplitudes ``C, D`` (m/s^2).
+    """Pitch and roll from the accelerometer amplitudes ``C, D``.
 
     ``model="exact"`` undoes the mounting exactly:
     ``[C0, D0] = rot(-phi) [C, D] / cos(eta)``, then ``sin(pitch) = C0 / g`` and
     ``cos(pitch) sin(roll) = D0 / g``. ``model="p3"`` uses P3's first-order mounting
     terms ``C0 = C - phi D``, ``D0 = D + phi C`` and ignores ``cos(eta)``.
+
+    Parameters
+    ----------
+    c, d : array
+        Accelerometer cosine and sine amplitudes, m/s^2.
+    g : array
+        Gravity magnitude, m/s^2 (broadcast with ``c``).
+    instrument : Instrument
+        Accelerometer mounting angles ``phi``, ``eta`` (rad) as calibrated.
+    model : "exact" or "p3"
+        Inversion model.
+
+    Returns
+    -------
+    pitch, roll : ndarray
+        rad.
     """
     phi, eta = instrument.accel_azimuth, instrument.accel_tilt
     if model == "exact":
@@ -227,9 +339,10 @@ def heading_latitude(
         the heading and ``r1 . w^l = w_x``, ``r2 . w^l = w_y`` are linear in
         ``(sin h, cos h)``.
     hemisphere : +1 or -1
-        Used when ``lat`` is None. ``w^l = w_x r1 + w_y r2 + lam r3`` with
-        ``lam^2 = Omega^2 - w_x^2 - w_y^2``; the root has ``sign(lam) = hemisphere``
-        (the elevated celestial pole above the table plane).
+        The user's declaration (north or south), used when ``lat`` is None.
+        ``w^l = w_x r1 + w_y r2 + lam r3`` with ``lam^2 = Omega^2 - w_x^2 - w_y^2``;
+        the root has ``sign(lam) = hemisphere`` (the elevated celestial pole above the
+        table plane). The data cannot supply this bit: both roots fit them exactly.
 
     Returns
     -------
@@ -277,7 +390,9 @@ def solve(
     lat : float, optional
         Known latitude, rad; if None it is estimated too.
     hemisphere : +1 or -1
-        North or south; only used when ``lat`` is None.
+        The hemisphere the user declares (north or south; see
+        :func:`hemisphere_sign`); only used when ``lat`` is None. Never taken from
+        the data, which cannot tell the two roots apart.
     height : float
         m, for normal gravity.
     model : "exact" or "p3"
@@ -287,9 +402,9 @@ def solve(
     Returns
     -------
     Solution
+        Heading, latitude, pitch and roll in rad, shaped like ``x[0]``.
     """
-    if hemisphere not in (1, -1):
-        raise InputError("hemisphere", f"must be +1 (north) or -1 (south), got {hemisphere!r}")
+    hemisphere = hemisphere_sign(hemisphere)
     if lat is not None:
         require_latitude(lat, "lat")
     x = np.asarray(x, dtype=float)
@@ -310,10 +425,21 @@ def solve(
 
 
 def _gravity_array(lat: np.ndarray, height: float) -> np.ndarray:
-    """:func:`inserr.earth.gravity` over an array of latitudes (rad) -> m/s^2."""
-    return np.vectorize(earth.gravity, otypes=[float])(lat, height)
+    """:func:`inserr.earth.gravity` over an array of latitudes (rad) -> m/s^2, same shape."""
+    return np.broadcast_to(np.asarray(earth.gravity(lat, height), dtype=float), np.shape(lat))
 
 
 def wrap_angle(angle: ArrayLike) -> np.ndarray:
-    """Wrap an angle difference to [-pi, pi)."""
+    """Wrap an angle difference to [-pi, pi).
+
+    Parameters
+    ----------
+    angle : array
+        rad.
+
+    Returns
+    -------
+    ndarray
+        rad, in [-pi, pi).
+    """
     return np.mod(np.asarray(angle) + math.pi, 2 * math.pi) - math.pi

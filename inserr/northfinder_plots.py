@@ -14,10 +14,21 @@ from inserr.units import DEG, MIL
 
 
 def heading_history_figure(result: MonteCarloResult, title: str = "") -> Figure:
-    """Heading error vs time: Monte Carlo 1 sigma and |bias| beside the Cramér-Rao bound.
+    """Plot heading error vs time: Monte Carlo 1 sigma and |bias| beside the Cramér-Rao bound.
 
     Left axis in mil (log scale), time in minutes; the 0.5 mil line is the
     convergence tolerance.
+
+    Parameters
+    ----------
+    result : MonteCarloResult
+        Error histories (rad, s) and the bounds with and without bias instability.
+    title : str
+        Axes title (default: "Heading error, <n> runs").
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     fig = Figure(figsize=(7.5, 4.2))
     ax = fig.add_subplot()
@@ -37,7 +48,19 @@ def heading_history_figure(result: MonteCarloResult, title: str = "") -> Figure:
 
 
 def convergence_figure(result: MonteCarloResult) -> Figure:
-    """Fraction of runs with ``|heading error| <= 0.5 mil`` vs time, with the 68 % line."""
+    """Plot the fraction of runs with ``|heading error| <= 0.5 mil`` vs time.
+
+    The 68 % line and, if reached, the convergence time are marked; time in minutes.
+
+    Parameters
+    ----------
+    result : MonteCarloResult
+        Heading error histories (rad) at the filter-period times (s).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig = Figure(figsize=(7.5, 3.2))
     ax = fig.add_subplot()
     ax.plot(result.times / 60.0, result.fraction_within())
@@ -54,7 +77,20 @@ def convergence_figure(result: MonteCarloResult) -> Figure:
 
 
 def latitude_history_figure(result: MonteCarloResult) -> Figure:
-    """Latitude error vs time: Monte Carlo 1 sigma and |bias| beside the bound, in deg."""
+    """Plot latitude error vs time: Monte Carlo 1 sigma and |bias| beside the bound.
+
+    Error in deg (log scale), time in minutes. With latitude known the curves are
+    empty (NaN).
+
+    Parameters
+    ----------
+    result : MonteCarloResult
+        Latitude error histories (rad) and the white-noise bound.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig = Figure(figsize=(7.5, 3.6))
     ax = fig.add_subplot()
     t = result.times / 60.0

@@ -72,29 +72,75 @@ HISTORY_STOPS = 8
 
 
 def yaw_rate_reversals(motion: Motion, duration: float, f: float) -> np.ndarray:
-    """Times (s) at which the vehicle yaw rate changes sign, sampled at ``f`` Hz.
+    """Times at which the vehicle yaw rate changes sign, from samples at ``f`` Hz.
 
-    Each time is the linear interpolation of the zero between two samples. The
-    samples are processed an hour at a time to bound memory.
+    Each time is the linear interpolation of the zero between two samples of
+    opposite sign, or the middle of a run of exactly-zero samples between them (a
+    hold between opposite turns). The samples are processed an hour at a time to
+    bound memory.
+
+    Parameters
+    ----------
+    motion : Motion
+        Vehicle motion (heading rate, rad/s, clockwise positive).
+    duration : float
+        Length of the run, s.
+    f : float
+        Sampling rate of the yaw rate, Hz.
+
+    Returns
+    -------
+    (K,) ndarray
+        Reversal times, s, sorted and unique.
     """
     out = []
     chunk = 3600.0
     t0 = 0.0
+    last: tuple[float, float] | None = None  # last non-zero sample (t, rate) seen so far
     while t0 < duration:
         t = np.arange(math.ceil(t0 * f), math.floor(min(t0 + chunk, duration) * f) + 1) / f
         r = motion.heading_rate(t)
-        k = np.flatnonzero(np.sign(r[1:]) * np.sign(r[:-1]) < 0)
-        out.append(t[k] + r[k] / (r[k] - r[k + 1]) / f)
+        # A reversal may pass through exact zeros (a hold between opposite turns): look
+        # for sign changes between consecutive NON-ZERO samples, carried across chunks.
+        nz = np.flatnonzero(r != 0.0)
+        tn, rn = t[nz], r[nz]
+        if last is not None:
+            tn, rn = np.concatenate([[last[0]], tn]), np.concatenate([[last[1]], rn])
+        k = np.flatnonzero(np.sign(rn[1:]) * np.sign(rn[:-1]) < 0)
+        adjacent = np.isclose(tn[k + 1] - tn[k], 1.0 / f)
+        # Adjacent samples: the interpolated zero. Across a run of zeros: its middle.
+        cross = np.where(
+            adjacent,
+            tn[k] + rn[k] / (rn[k] - rn[k + 1]) * (tn[k + 1] - tn[k]),
+            0.5 * (tn[k] + tn[k + 1]),
+        )
+        out.append(cross)
+        if len(tn):
+            last = (float(tn[-1]), float(rn[-1]))
         t0 += chunk
     x = np.concatenate(out) if out else np.zeros(0)
     return np.unique(x)
 
 
 def heading_period(reversals: np.ndarray, t: float, history: float) -> float | None:
-    """Period (s) of the heading oscillation seen in ``[t - history, t]``, or None.
+    """Period of the heading oscillation seen in the window ``(t - history, t]``.
 
     Twice the mean spacing of the yaw-rate reversals in the window; at least three
     reversals are required.
+
+    Parameters
+    ----------
+    reversals : (K,) array
+        Sorted yaw-rate reversal times, s (:func:`yaw_rate_reversals`).
+    t : float
+        End of the window, s.
+    history : float
+        Length of the window, s.
+
+    Returns
+    -------
+    float or None
+        Period, s; None with fewer than three reversals in the window.
     """
     lo, hi = np.searchsorted(reversals, [t - history, t], side="right")
     x = reversals[lo:hi]
@@ -109,7 +155,19 @@ def step_dwell(
     """Shortest dwell >= ``stop`` whose step advances the swing phase by the target.
 
     The target is ``frac(step / period) = x (mod PHASE_MODULUS)`` for ``x`` in
-    :data:`PHASE_FRACTIONS`, whichever needs the shorter dwell.
+    :data:`PHASE_FRACTIONS`, whichever needs the shorter dwell; the step is the dwell
+    plus the turn time.
+
+    Parameters
+    ----------
+    stop : float
+        Minimum stop time ``Ts``, s.
+    turn_time : float
+        Duration of the table turn that follows the stop, s.
+    period : float or None
+        Period of the heading oscillation, s (None: no oscillation).
+    extension : float
+        Longest lengthening allowed, s.
 
     Returns
     -------
@@ -132,23 +190,25 @@ class NullingTwoPosition:
 
     Parameters
     ----------
-    rate : float, rad/s
-        Table rate; every turn is 180 deg.
-    stop : float, s
-        Minimum stop time ``Ts``.
-    mounting : (3, 3), optional
-        IMU mounting on the inner gimbal.
-    f : float, Hz
-        Sampling rate of the yaw rate used to find its reversals.
-    delta : float, rad
-        Smallest peak-to-peak heading oscillation the rule reacts to; below it
+    rate : float
+        Table rate, rad/s; every turn is 180 deg about the outer (azimuth) gimbal.
+    stop : float
+        Minimum stop time ``Ts``, s.
+    mounting : (3, 3) array, optional
+        IMU mounting ``C_s^t`` on the inner gimbal (see :class:`~inserr.table.TableSchedule`).
+    f : float
+        Sampling rate of the yaw rate used to find its reversals, Hz.
+    delta : float
+        Smallest peak-to-peak heading oscillation the rule reacts to, rad; below it
         every stop lasts ``Ts``.
     variant : str
         Only ``"threshold"`` (accepted so that the flexible rule's scenario
         options apply unchanged).
-    extension : float, s, optional
-        Longest lengthening of a stop (default ``Ts``); when more would be needed
+    extension : float, optional
+        Longest lengthening of a stop, s (default ``Ts``); when more would be needed
         (heading periods of several ``Ts``) the stop lasts ``Ts``.
+    name : str
+        Scheme name used in reports.
     """
 
     rate: float
@@ -186,11 +246,22 @@ class NullingTwoPosition:
         return period if float(np.ptp(h)) >= self.delta else None
 
     def plan(self, motion: Motion, duration: float) -> TableSchedule:
-        """Run the rule over ``duration`` seconds of ``motion``.
+        """Plan the table schedule the rule produces for a vehicle motion.
 
-        ``meta`` records ``fallbacks`` (stops left at ``Ts`` because the period
-        needed more than ``extension``), ``lengthened`` (stops lengthened) and the
-        ``period_estimates_s`` used (one per stop, NaN where none).
+        Parameters
+        ----------
+        motion : Motion
+            Vehicle motion (heading in rad, heading rate in rad/s).
+        duration : float
+            Length of the run, s.
+
+        Returns
+        -------
+        TableSchedule
+            Stops and 180 deg outer-gimbal turns; ``meta`` records ``fallbacks``
+            (stops left at ``Ts`` because the period needed more than
+            ``extension``), ``lengthened`` (stops lengthened) and the
+            ``period_estimates_s`` used (one per stop, s, NaN where none).
         """
         ts = self.stop
         turn_time = math.pi / self.rate
@@ -227,20 +298,21 @@ class ErrorIntegrals:
 
     For a unit error of each source the gyro error rate resolved in n is
     ``C_s^n b`` (bias) or ``C_s^n K w_is^s`` (scale factor, misalignment; ``w_is``
-    the true IMU rate: Earth + vehicle + table). Its integral is the attitude
-    error it would cause without the Earth-rate and Schuler coupling, so a
-    scheme is good when these stay bounded.
+    the true IMU rate: Earth + vehicle + table). Its integral is, up to sign
+    (``psi' = -eps^n``), the attitude error it would cause without the Earth-rate
+    and Schuler coupling, so a scheme is good when these stay bounded.
 
     Attributes
     ----------
-    t : (M,) s
-        Output times.
+    t : (M,) ndarray
+        Output times, s.
     names : tuple of str
-        ``bias_x``... ``sf_z``, ``mis_xy``... ``mis_zy``.
-    running : (M, N, 3) rad per unit error (s for biases)
-        Running integral (E, N, U) at each output time.
-    by_phase : dict {"stop", "turn"} -> (N, 3)
-        Integral over the whole run split by table phase.
+        The N sources ``bias_x``... ``sf_z``, ``mis_xy``... ``mis_zy``.
+    running : (M, N, 3) ndarray
+        Running integral (E, N, U) at each output time: rad per unit error
+        (dimensionless scale factor or rad of misalignment), s for a bias of 1 rad/s.
+    by_phase : dict {"stop", "turn"} -> (N, 3) ndarray
+        Integral over the whole run split by table phase, same units.
     """
 
     t: np.ndarray
@@ -273,15 +345,22 @@ def error_integrals(
     Parameters
     ----------
     table : TableSchedule
+        Gimbal-angle history (gives ``C_s^b``).
     motion : Motion
-    earth_rate_n : (3,) rad/s
-        Earth rate resolved in ENU (``Site.earth_rate_n``).
-    duration : float, s
-    dt : float, s
-        Integration step (0.2 s resolves swings down to ~10 s periods and the
+        Vehicle motion (gives ``C_b^n``).
+    earth_rate_n : (3,) array
+        Earth rate resolved in ENU, rad/s (``Site.earth_rate_n``).
+    duration : float
+        Length of the run, s.
+    dt : float
+        Integration step, s (0.2 s resolves swings down to ~10 s periods and the
         6 deg/s turns).
-    t_out : (M,) s, optional
-        Output times (default every 60 s).
+    t_out : (M,) array, optional
+        Output times, s (default every 60 s).
+
+    Returns
+    -------
+    ErrorIntegrals
     """
     names, rows = _unit_matrices()
     if t_out is None:

@@ -87,12 +87,14 @@ class Segment:
 
     Parameters
     ----------
-    a : (n, n) 1/s
-        Continuous-time system matrix.
-    c : (m, n)
-        Measurement matrix.
-    duration : float, s
-    jump : (n, n), optional
+    a : (n, n) array
+        Continuous-time system matrix ``A`` (SI; entries in state unit per state
+        unit per s).
+    c : (m, n) array
+        Measurement matrix ``C`` (SI).
+    duration : float
+        Length ``T`` of the segment, s.
+    jump : (n, n) array, optional
         Applied to the state at the start of the segment (``x+ = J x-``), e.g. the
         n-resolved biases of an instantaneous table turn.
     """
@@ -109,7 +111,7 @@ class Vocabulary:
 
     Parameters
     ----------
-    display : (n, n)
+    display : (n, n) array
         ``x_display = display @ x`` (e.g. IMU-frame biases resolved in n).
     symbols : tuple of str
         Symbol of every display coordinate (``"φN"``, ``"∇E"``...).
@@ -124,9 +126,9 @@ class Vocabulary:
         largest remaining component is taken first (column pivoting), which keeps
         the relations sparse.
     constants : dict name -> float
-        Named scalars that coefficients are matched against (``"g"``).
-    matrices : dict name -> (3, 3)
-        Named 3x3 matrices that vector relations are matched against (``"Ω×"``).
+        Named scalars (SI) that coefficients are matched against (``"g"``).
+    matrices : dict name -> (3, 3) array
+        Named 3x3 matrices that vector relations are matched against (``"Ω×"``, rad/s).
     """
 
     display: np.ndarray
@@ -145,13 +147,15 @@ class Pwcs:
     Parameters
     ----------
     segments : tuple of Segment
+        The pieces, in time order.
     names : tuple of str
         Machine names of the states.
-    scale : (n,) SI
-        Typical magnitude of every state.
-    output_scale : (m,) SI
-        Typical magnitude of every measurement.
+    scale : (n,) array
+        Typical magnitude of every state, SI (rad, m/s, m, rad/s, m/s^2).
+    output_scale : (m,) array
+        Typical magnitude of every measurement, SI (m/s or m).
     vocabulary : Vocabulary
+        How the null space is put into words.
     description : str
         One line for reports.
     """
@@ -175,18 +179,20 @@ class ObservabilityResult:
 
     Attributes
     ----------
-    names : state names
+    names : tuple of str
+        State names.
     rank : int
         Numerical rank (singular values above ``tolerance``).
-    singular_values : (n,)
+    singular_values : (n,) ndarray
         Of the scaled TOM (dimensionless: output magnitudes in typical units per
         typical unit of state), descending.
     tolerance : float
         Absolute rank threshold, ``RANK_RTOL * singular_values[0]``.
     gap : float
         ``sigma[rank-1] / sigma[rank]`` (inf at full rank): how clear the rank decision is.
-    null_space : (n, n - rank) SI
-        Orthonormal-in-scaled-units basis of the unobservable initial states.
+    null_space : (n, n - rank) ndarray
+        Basis of the unobservable initial states in SI state units (orthonormal in
+        scaled units).
     unobservable : tuple of str
         The null space in words.
     som_rank : int
@@ -195,6 +201,10 @@ class ObservabilityResult:
         True if ``null(O_j)`` lies in ``null(A_j)`` for every segment and no segment
         starts with a (non-identity) jump, so the SOM rank equals the TOM rank
         (Goshen-Meskin & Bar-Itzhack's condition).
+    description : str
+        One line for reports (the system's).
+    extra : dict
+        Extra fields copied into :meth:`to_dict`.
     """
 
     names: tuple[str, ...]
@@ -215,7 +225,14 @@ class ObservabilityResult:
         return len(self.names)
 
     def to_dict(self) -> dict:
-        """Plain dict for JSON output."""
+        """Plain dict for JSON output.
+
+        Returns
+        -------
+        dict
+            Rank, singular values, tolerances, the null space in words, SOM rank and
+            validity, and the entries of :attr:`extra`.
+        """
         return {
             "model": self.description,
             "n_states": self.n_states,
@@ -242,6 +259,20 @@ def segment_observability(a: np.ndarray, c: np.ndarray, duration: float) -> np.n
     the segment, a row scaling of ``[C; C A; ...; C A^(n-1)]`` (python-control's
     ``obsv``) that keeps the powers bounded. Built by the recursion
     ``B_k = B_(k-1) (A T) / k``.
+
+    Parameters
+    ----------
+    a : (n, n) array
+        System matrix, 1/s (in scaled state units).
+    c : (m, n) array
+        Measurement matrix (scaled units).
+    duration : float
+        Segment length ``T``, s.
+
+    Returns
+    -------
+    (n m, n) ndarray
+        Dimensionless blocks ``C (A T)^k / k!``, k = 0 .. n-1.
     """
     n = a.shape[0]
     at = a * duration
@@ -313,6 +344,7 @@ def stacked_observability(system: Pwcs, stripped: bool = False) -> np.ndarray:
     Parameters
     ----------
     system : Pwcs
+        The piecewise-constant system.
     stripped : bool
         If True, omit the transition products (Goshen-Meskin's SOM).
 
@@ -346,8 +378,13 @@ def analyze(system: Pwcs, extra: dict | None = None) -> ObservabilityResult:
     Parameters
     ----------
     system : Pwcs
+        The piecewise-constant system.
     extra : dict, optional
         Extra fields copied into :meth:`ObservabilityResult.to_dict`.
+
+    Returns
+    -------
+    ObservabilityResult
     """
     st = _stack(system)
     s, vt = _svd(st.tom, system.n)
@@ -400,9 +437,10 @@ def describe_null_space(null: np.ndarray, system: Pwcs) -> list[str]:
 
     Parameters
     ----------
-    null : (n, k) SI
-        Basis of the null space in state coordinates.
+    null : (n, k) array
+        Basis of the null space in state coordinates, SI state units.
     system : Pwcs
+        Supplies the state scales and the :class:`Vocabulary`.
 
     Returns
     -------
@@ -565,7 +603,17 @@ def _scale_of(name: str) -> float:
 
 
 def level_imu(heading: float) -> np.ndarray:
-    """``C_s^n`` of a level IMU whose y axis points at ``heading`` (rad, clockwise from north)."""
+    """Attitude ``C_s^n`` (IMU s to ENU) of a level IMU whose y axis points at ``heading``.
+
+    Parameters
+    ----------
+    heading : float
+        Heading of the IMU y axis, rad, clockwise from north.
+
+    Returns
+    -------
+    (3, 3) ndarray
+    """
     return body_to_nav(heading, 0.0, 0.0)
 
 
@@ -591,6 +639,21 @@ def alignment10(site: Site, headings, dwell: float = 60.0) -> Pwcs:
     errors (known position: ``dr = 0``, so ``phi = psi``), the clamped vertical
     channel and the z accelerometer bias, which for a level IMU enters only the
     clamped vertical channel.
+
+    Parameters
+    ----------
+    site : Site
+        Latitude, gravity and Earth rate.
+    headings : float or sequence of float
+        Headings of the IMU y axis, rad, clockwise from north, one segment each.
+    dwell : float
+        Length of every segment, s.
+
+    Returns
+    -------
+    Pwcs
+        Ten states, two velocity measurements; the vocabulary displays the biases
+        in ENU at the first heading.
     """
     h = _check_headings(headings)
     if not (math.isfinite(dwell) and dwell > 0):
@@ -608,7 +671,8 @@ def alignment10(site: Site, headings, dwell: float = 60.0) -> Pwcs:
         # Everything dropped except the (assumed zero) position errors must be
         # disconnected from the kept states, or the restriction would be wrong.
         leak = a_imu[np.ix_(keep, [i for i in drop if i not in dr])]
-        assert np.max(np.abs(leak)) < 1e-12, "alignment10 restriction is not closed"
+        if np.max(np.abs(leak)) >= 1e-12:  # a model change broke the 10-state restriction
+            raise RuntimeError("alignment10 restriction is not closed")
         a = a_imu[np.ix_(keep, keep)]
         c = np.zeros((2, 10))
         c[0, 0] = c[1, 1] = 1.0
@@ -648,6 +712,19 @@ def measurement_matrix(model: ErrorModel, position: bool = False) -> np.ndarray:
     Velocity errors E, N (and U when the vertical channel is free), position errors
     likewise when ``position``. A clamped vertical channel is held at zero by the
     model, so it is not measured.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The core model (its layout and vertical-channel mode).
+    position : bool
+        Also measure the position errors.
+
+    Returns
+    -------
+    (m, n) ndarray
+        One 1 per row, selecting ``dv_*`` (m/s, ENU) and ``dr_*`` (m, ENU) out of the
+        ``n`` states of ``model.layout``.
     """
     axes = ("e", "n") if model.vertical == "clamped" else ("e", "n", "u")
     names = list(model.layout.names)
@@ -718,6 +795,25 @@ def full_headings(
     n-resolved biases rotate with the IMU (jump ``T_new^-1 T_old`` of the
     :meth:`~inserr.model.ErrorModel.imu_transform`). Biases are named by their
     n-frame components at the first heading.
+
+    Parameters
+    ----------
+    site : Site
+        Latitude, gravity and Earth rate.
+    headings : float or sequence of float
+        Headings of the IMU y axis, rad, clockwise from north, one stop each.
+    dwell : float
+        Length of every stop, s.
+    position : bool
+        Also measure the position errors (m, ENU).
+    vertical : {"free", "clamped"}
+        Vertical-channel mode of the :class:`~inserr.model.ErrorModel`.
+
+    Returns
+    -------
+    Pwcs
+        The movable core states (psi rad, dv m/s, dr m, eps rad/s, nabla m/s^2,
+        all ENU) with zero-velocity (and position) measurements.
     """
     h = _check_headings(headings)
     model = ErrorModel(site, Layout(bias=True), vertical=vertical)
@@ -743,6 +839,22 @@ def full_timeline(model: ErrorModel, timeline, position: bool = False) -> Pwcs:
 
     Every interval (stop, table turn, swing sub-step) is one segment with
     ``A = model.matrix(w)``; the n-resolved biases follow the IMU through ``w``.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The core model with ``Layout(bias=True)`` (the vocabulary and scales know
+        psi, dv, dr, eps and nabla only).
+    timeline : Timeline
+        Node times (s) and the IMU angular velocity relative to n, resolved in ENU
+        (rad/s), per interval.
+    position : bool
+        Also measure the position errors (m, ENU).
+
+    Returns
+    -------
+    Pwcs
+        The movable core states, ENU, with zero-velocity (and position) measurements.
     """
     dts = np.diff(timeline.times)
     mats = [(model.matrix(w), float(dt), None) for w, dt in zip(timeline.omega_n, dts, strict=True)]

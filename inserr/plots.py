@@ -16,52 +16,79 @@ from inserr.units import ARCMIN, ARCSEC, HOUR, NMI  # noqa: E402
 
 
 def horizontal_error(results: dict, title: str = "Horizontal position error") -> plt.Figure:
-    """Deterministic horizontal error per run, with RMS, worst case and noise 1-sigma.
+    """Horizontal error per run: signs as given, RMS and worst sign pattern, noise 1-sigma.
+
+    One panel per run (shared axes), so every run shows its own envelope; a single
+    run gets a single panel.
 
     Parameters
     ----------
-    results : dict name -> DriftResult
+    results : dict
+        Run name -> :class:`inserr.drift.DriftResult` (times in s, errors in m).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Time in hours, horizontal error in nautical miles.
     """
-    fig, ax = plt.subplots(figsize=(8, 4.5))
+    n = len(results)
+    cols = 1 if n <= 3 else 2
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(
+        rows,
+        cols,
+        figsize=(8 if cols == 1 else 11, 1.2 + 2.6 * rows),
+        sharex=True,
+        sharey=True,
+        squeeze=False,
+    )
     for i, (name, r) in enumerate(results.items()):
-        color = f"C{i}"
-        ax.plot(
-            r.t / HOUR, r.horizontal / NMI, color=color, lw=1.0, label=f"{name} (signs as given)"
-        )
-        if len(results) == 1:
-            ax.plot(
-                r.t_cov / HOUR,
-                r.rms_horizontal / NMI,
-                color="C1",
-                lw=1.0,
-                ls="--",
-                label="RMS, unknown signs",
-            )
-            ax.plot(
-                r.t_cov / HOUR,
-                r.worst_horizontal / NMI,
-                color="C3",
-                lw=0.8,
-                ls=":",
-                label="worst sign pattern",
-            )
-            sig = r.noise_horizontal_sigma
-            if np.any(sig > 0):
-                base = np.interp(r.t_cov, r.t, r.horizontal)
-                ax.fill_between(
-                    r.t_cov / HOUR,
-                    (base - sig) / NMI,
-                    (base + sig) / NMI,
-                    color=color,
-                    alpha=0.2,
-                    label="noise 1-sigma envelope",
-                )
-    ax.set_xlabel("time (h)")
-    ax.set_ylabel("horizontal error (nmi)")
-    ax.set_title(title)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+        _horizontal_panel(axes.flat[i], name, r, f"C{i}")
+    for ax in axes.flat[n:]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
+        ax.set_xlabel("time (h)")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("horizontal error (nmi)")
+    fig.suptitle(title)
+    fig.tight_layout()
     return fig
+
+
+def _horizontal_panel(ax, name: str, r, color: str) -> None:
+    ax.plot(r.t / HOUR, r.horizontal / NMI, color=color, lw=1.0, label="signs as given")
+    ax.plot(
+        r.t_cov / HOUR,
+        r.rms_horizontal / NMI,
+        color="k",
+        lw=0.9,
+        ls="--",
+        label="RMS, unknown signs",
+    )
+    ax.plot(
+        r.t_cov / HOUR,
+        r.worst_horizontal / NMI,
+        color="C3",
+        lw=0.8,
+        ls=":",
+        label="worst sign pattern",
+    )
+    sig = r.noise_horizontal_sigma
+    if np.any(sig > 0):
+        base = np.interp(r.t_cov, r.t, r.horizontal)
+        ax.fill_between(
+            r.t_cov / HOUR,
+            (base - sig) / NMI,
+            (base + sig) / NMI,
+            color=color,
+            alpha=0.25,
+            label="noise 1-sigma envelope",
+        )
+    ax.set_title(name, fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
 
 
 def attitude_errors(results: dict) -> plt.Figure:

@@ -18,13 +18,27 @@ _QUIET = False
 
 
 def set_quiet(quiet: bool) -> None:
-    """Silence (or re-enable) every progress bar of this process (``--json`` sets it)."""
+    """Silence (or re-enable) every progress bar of this process (``--json`` sets it).
+
+    Parameters
+    ----------
+    quiet : bool
+        True to silence the bars, False to allow them again.
+    """
     global _QUIET
     _QUIET = bool(quiet)
 
 
 def enabled() -> bool:
-    """True when progress bars should be drawn: stderr is a TTY and not quiet."""
+    """True when progress bars should be drawn.
+
+    That is when stderr is a TTY, :func:`set_quiet` has not silenced them, and the
+    environment variable ``INSERR_NO_PROGRESS`` is unset or empty.
+
+    Returns
+    -------
+    bool
+    """
     if _QUIET or os.environ.get("INSERR_NO_PROGRESS"):
         return False
     try:
@@ -34,7 +48,22 @@ def enabled() -> bool:
 
 
 def progress(iterable: Iterable[T], *, total: int | None = None, desc: str = "") -> Iterator[T]:
-    """Wrap ``iterable`` in a tqdm bar when :func:`enabled`, else return it unchanged."""
+    """Iterate over ``iterable``, through a tqdm bar on stderr when :func:`enabled`.
+
+    Parameters
+    ----------
+    iterable : iterable
+        The items to iterate over.
+    total : int, optional
+        Number of items, for the bar when ``iterable`` has no ``len``.
+    desc : str
+        Label of the bar.
+
+    Yields
+    ------
+    object
+        The items of ``iterable``, unchanged (this is a generator in both cases).
+    """
     if not enabled():
         yield from iterable
         return
@@ -44,7 +73,19 @@ def progress(iterable: Iterable[T], *, total: int | None = None, desc: str = "")
 
 
 class Bar:
-    """A manual progress bar (``update(n)``) with the same terminal rule as :func:`progress`."""
+    """A manual progress bar (``update(n)``) with the same terminal rule as :func:`progress`.
+
+    Usable as a context manager (closes on exit); does nothing when not :func:`enabled`.
+
+    Parameters
+    ----------
+    total : float
+        Total amount of work, in ``unit``.
+    desc : str
+        Label of the bar.
+    unit : str
+        Name of the unit of work shown by tqdm.
+    """
 
     def __init__(self, total: float, desc: str = "", unit: str = "it"):
         self._bar = None
@@ -54,10 +95,18 @@ class Bar:
             self._bar = tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, leave=False)
 
     def update(self, n: float = 1) -> None:
+        """Advance the bar.
+
+        Parameters
+        ----------
+        n : float
+            Amount of work done since the last update, in the bar's unit.
+        """
         if self._bar is not None:
             self._bar.update(n)
 
     def close(self) -> None:
+        """Close the bar (it is removed from the terminal: ``leave=False``)."""
         if self._bar is not None:
             self._bar.close()
 

@@ -31,10 +31,16 @@ class Steps:
     Attributes
     ----------
     dt : (S,) s
-    omega_n : (S, 3) rad/s (quantized)
+        Step durations.
+    omega_n : (S, 3) rad/s
+        Angular velocity of the IMU frame relative to n, resolved in ENU, in each
+        step (quantized; zero when the timeline was ignored).
     key : (S,) int
         Index into the unique ``(w, dt)`` pairs.
-    unique_omega, unique_dt : the unique pairs.
+    unique_omega : (U, 3) rad/s
+        The unique quantized angular velocities (ENU).
+    unique_dt : (U,) s
+        The matching unique quantized durations.
     records : list of (S,) int
         Per output grid: the output index recorded at the end of each step, -1 if none.
     """
@@ -48,7 +54,7 @@ class Steps:
 
     @property
     def record(self) -> np.ndarray:
-        """Record indices of the first output grid."""
+        """Record indices (S,) of the first output grid (-1 where none)."""
         return self.records[0]
 
 
@@ -63,6 +69,7 @@ def make_steps(
     Parameters
     ----------
     timeline : Timeline
+        IMU attitude history; its node times are the interval boundaries.
     t_out : (M,) s
         Output times in [0, duration], increasing. A time 0 is recorded before the
         first step by the caller.
@@ -70,10 +77,30 @@ def make_steps(
         If False (model without rotating states), interval boundaries are ignored:
         the steps are just the output intervals.
     extra_grids : sequence of arrays
-        Further output grids (each gets its own record array).
+        Further output grids, s (each gets its own record array).
+
+    Returns
+    -------
+    Steps
+        Steps between consecutive merged nodes (nodes closer than ``10 DT_QUANTUM``
+        merged), each inside one constant-rate interval.
     """
     grids = [np.asarray(t_out, dtype=float), *(np.asarray(g, dtype=float) for g in extra_grids)]
     end = timeline.duration
+    for g in grids:
+        # Each output time must end its own step: duplicates (to within the merge
+        # tolerance) would leave a record unwritten, and times past the end would be
+        # extrapolated with the last interval's rate.
+        if g.size and not (
+            np.all(np.isfinite(g))
+            and g[0] >= 0.0
+            and g[-1] <= end + 10 * DT_QUANTUM
+            and np.all(np.diff(g) > 10 * DT_QUANTUM)
+        ):
+            raise ValueError(
+                f"output times must be finite, strictly increasing (by > {10 * DT_QUANTUM:g} s) "
+                f"and within [0, {end:g}] s"
+            )
     base = timeline.times if use_omega else np.array([0.0, end])
     nodes = np.unique(np.concatenate([base, *grids]))
     # Merge times closer than the dt quantum (e.g. an output time equal to a node
@@ -160,7 +187,17 @@ def _iter_runs(disc: Discretizer, steps: Steps, group: int = 4096):
 
 @dataclass(frozen=True)
 class Output:
-    """What to record: states ``rows`` of columns ``cols`` at times ``t`` (s)."""
+    """What to record: states ``rows`` of columns ``cols`` at times ``t``.
+
+    Attributes
+    ----------
+    t : (M,) s
+        Output times, increasing, within [0, duration].
+    rows : slice or index array
+        State indices to record (default: the nine navigation states).
+    cols : slice or index array
+        Columns of the propagated state matrix to record (default: all).
+    """
 
     t: np.ndarray
     rows: slice | np.ndarray = field(default_factory=lambda: slice(0, 9))
@@ -173,8 +210,24 @@ def propagate_outputs(
     """Deterministic propagation of state columns, recorded on several output grids at once.
 
     One pass over the timeline serves every grid, so an expensive continuous-motion
-    timeline is discretized once. Returns one array (M_o, len(rows_o), len(cols_o))
-    per output.
+    timeline is discretized once.
+
+    Parameters
+    ----------
+    disc : Discretizer
+        Discretization cache of the error model.
+    timeline : Timeline
+        IMU attitude history (``C_s^n``, ``w`` resolved in ENU).
+    x0 : (n,) or (n, N)
+        Initial augmented state column(s), SI, state order of :attr:`Layout.names`.
+    outputs : sequence of Output
+        What to record and when; at least one.
+
+    Returns
+    -------
+    list of ndarray
+        One array of shape (M_o, len(rows_o), len(cols_o)) per output, in the
+        state units.
     """
     n = disc.model.layout.n
     x = np.array(x0, dtype=float).reshape(n, -1)
@@ -245,7 +298,8 @@ def propagate_states(
 
     Returns
     -------
-    ndarray, shape (M, len(rows), N) — or (M, len(rows)) for a 1-D ``x0``.
+    ndarray, shape (M, len(rows), N), or (M, len(rows)) for a 1-D ``x0``
+        The recorded states, SI (psi rad, dv m/s, dr m, ENU for the default rows).
     """
     squeeze = np.ndim(x0) == 1
     out = propagate_outputs(
@@ -275,14 +329,16 @@ def propagate_covariance(
     disc : Discretizer
         Must have been built with a noise intensity ``q``.
     timeline : Timeline
+        IMU attitude history (``C_s^n``, ``w`` resolved in ENU).
     p0 : (n, n)
-        Initial covariance.
+        Initial covariance, state units squared.
     t_out : (M,) s
-        Output times, increasing.
+        Output times, increasing, within [0, duration].
 
     Returns
     -------
     ndarray, shape (M, n, n)
+        Symmetrised covariance at each output time, state units squared.
     """
     t_out = np.asarray(t_out, dtype=float)
     p = np.array(p0, dtype=float)

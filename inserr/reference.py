@@ -106,17 +106,51 @@ def require_pyins():
 
 
 def to_pyins_dcm(c_sn: np.ndarray) -> np.ndarray:
-    """pyins ``mat_nb`` (forward-right-down to NED) from ``C_s^n`` (right-front-up to ENU)."""
+    """Convert inserr ``C_s^n`` to the pyins attitude matrix ``mat_nb``.
+
+    Parameters
+    ----------
+    c_sn : (..., 3, 3) array
+        IMU frame s (right-front-up) to ENU.
+
+    Returns
+    -------
+    (..., 3, 3) ndarray
+        pyins body (forward-right-down) to NED, ``SWAP C_s^n SWAP``.
+    """
     return SWAP @ np.asarray(c_sn, dtype=float) @ SWAP
 
 
 def from_pyins_dcm(mat_nb: np.ndarray) -> np.ndarray:
-    """inserr ``C_s^n`` from pyins ``mat_nb`` (the swap is its own inverse)."""
+    """Convert the pyins attitude matrix ``mat_nb`` to inserr ``C_s^n``.
+
+    Parameters
+    ----------
+    mat_nb : (..., 3, 3) array
+        pyins body (forward-right-down) to NED.
+
+    Returns
+    -------
+    (..., 3, 3) ndarray
+        IMU frame s (right-front-up) to ENU (the swap is its own inverse).
+    """
     return SWAP @ np.asarray(mat_nb, dtype=float) @ SWAP
 
 
 def swap_vectors(v: np.ndarray) -> np.ndarray:
-    """Vectors (..., 3) between inserr axes (ENU, right-front-up) and pyins axes (NED, FRD)."""
+    """Swap vector components between inserr axes and pyins axes (either direction).
+
+    Parameters
+    ----------
+    v : (..., 3) array
+        Components in inserr axes (ENU or right-front-up) or pyins axes (NED or
+        forward-right-down); any unit.
+
+    Returns
+    -------
+    (..., 3) ndarray
+        ``SWAP v``: the same vectors in the other library's axes, same unit.
+    """
     return np.asarray(v, dtype=float) @ SWAP  # SWAP is symmetric: row form of SWAP @ v
 
 
@@ -128,6 +162,16 @@ def attitude_history(timeline: Timeline) -> AttitudeFn:
     ``C_b^n(t) C_s^b(t)``, continuous in time: the reference then also checks the
     timeline's sub-stepping of continuous motion. Otherwise the timeline's own
     piecewise-constant-rate history (:meth:`Timeline.attitude_at`).
+
+    Parameters
+    ----------
+    timeline : Timeline
+        Scenario timeline, optionally with ``meta["table"]`` and ``meta["motion"]``.
+
+    Returns
+    -------
+    callable
+        ``attitude(t)``: times (n,) in s to ``C_s^n`` (n, 3, 3), IMU frame s to ENU.
     """
     table = timeline.meta.get("table")
     motion = timeline.meta.get("motion")
@@ -149,18 +193,19 @@ def ideal_increments(
     Parameters
     ----------
     site : Site
+        Position of the IMU (lat, lon rad, height m), converted to degrees for pyins.
     attitude : callable
-        ``C_s^n`` (ENU) at an array of times.
-    times : (n,) s
-        Sample times, equally spaced.
+        ``C_s^n`` (IMU frame s to ENU), (n, 3, 3), at an array of times (s).
+    times : (n,) array
+        Sample times, s, equally spaced.
 
     Returns
     -------
-    gyro : (n, 3) rad
-        Angle increment over ``[times[i-1], times[i]]`` in the IMU frame (row 0
+    gyro : (n, 3) ndarray
+        Angle increment, rad, over ``[times[i-1], times[i]]`` in the IMU frame s (row 0
         repeats row 1, pyins's convention).
-    accel : (n, 3) m/s
-        Integrated specific force over the same intervals, IMU frame.
+    accel : (n, 3) ndarray
+        Integrated specific force, m/s, over the same intervals, IMU frame s.
     """
     pyins = require_pyins()
     times = np.asarray(times, dtype=float)
@@ -183,11 +228,14 @@ class ErrorHistory:
 
     Attributes
     ----------
-    t : (M,) s
-    phi : (M, 3) rad
-        True attitude error (E, N tilts; U heading error, + = heading too large).
-    dv : (M, 3) m/s
-    dr : (M, 3) m
+    t : (M,) ndarray
+        Output times, s.
+    phi : (M, 3) ndarray
+        True attitude error, rad (E, N tilts; U heading error, + = heading too large).
+    dv : (M, 3) ndarray
+        Velocity error, m/s, ENU.
+    dr : (M, 3) ndarray
+        Position error, m, ENU.
     """
 
     t: np.ndarray
@@ -201,7 +249,18 @@ class ErrorHistory:
         return np.hypot(self.dr[:, 0], self.dr[:, 1])
 
     def nav(self, site: Site) -> np.ndarray:
-        """(M, 9) navigation errors in the linear model's layout: psi, dv, dr."""
+        """Navigation errors in the linear model's layout ``[psi, dv, dr]``.
+
+        Parameters
+        ----------
+        site : Site
+            True site (radii and latitude of the position-error angle).
+
+        Returns
+        -------
+        (M, 9) ndarray
+            psi (rad), dv (m/s), dr (m), all ENU; ``psi = phi - dtheta(dr)``.
+        """
         psi = self.phi - position_angle(site, self.dr)
         return np.hstack([psi, self.dv, self.dr])
 
@@ -213,14 +272,15 @@ class RunSpec:
     Parameters
     ----------
     imu : ImuErrors
-        Sensor errors of the run (constants as realised; noise levels).
+        Sensor errors of the run (constants as realised; noise levels), SI, IMU frame s.
     init : InitialErrors
-    seed : SeedSequence, optional
+        Initial attitude (rad), velocity (m/s) and position (m) errors, ENU.
+    seed : numpy.random.SeedSequence, optional
         Entropy of the noise streams (needed when ``noise`` and the budget is noisy).
     noise : bool
         Draw white noise and bias instability (False: deterministic errors only).
-    record_step : float, s, optional
-        Output step of this run (default: :func:`simulate`'s).
+    record_step : float, optional
+        Output step of this run, s (default: :func:`simulate`'s).
     """
 
     imu: ImuErrors
@@ -283,21 +343,29 @@ def simulate(
     site : Site
         Where the IMU rests (WGS84 ellipsoid; pyins has no spherical Earth).
     attitude : callable
-        Exact ``C_s^n(t)`` (ENU), e.g. :func:`attitude_history`.
-    duration : float, s
+        Exact ``C_s^n(t)`` (IMU frame s to ENU) at times in s, e.g.
+        :func:`attitude_history`.
+    duration : float
+        Length of the run, s.
     runs : sequence of RunSpec
-    rate : float, Hz
-        IMU sample rate. Samples are at ``k / rate``, ``k = 0 .. floor(duration rate)``.
-    record_step : float, s
-        Output step, rounded to a whole number of samples (the last sample is
+        Error realisations, all integrated over the same ideal increments.
+    rate : float
+        IMU sample rate, Hz. Samples are at ``k / rate``,
+        ``k = 0 .. floor(duration rate)``.
+    record_step : float
+        Output step, s, rounded to a whole number of samples (the last sample is
         always recorded).
-    chunk : float, s
-        Length of the pieces generated and integrated at once (bounds memory).
+    chunk : float
+        Length of the pieces generated and integrated at once, s (bounds memory).
     vertical : {"clamped", "free"}
+        Vertical channel: aided (pyins ``with_altitude=False``) or free.
+    desc : str
+        Label of the progress bar.
 
     Returns
     -------
-    list of ErrorHistory, one per run.
+    list of ErrorHistory
+        One per run, in the order of ``runs`` (ENU, SI, computed minus true).
     """
     pyins = require_pyins()
     import pandas as pd
@@ -376,5 +444,19 @@ def _errors(site: Site, attitude: AttitudeFn, rows: np.ndarray) -> ErrorHistory:
 def deterministic_run(
     imu: ImuErrors, init: InitialErrors, record_step: float | None = None
 ) -> RunSpec:
-    """The run with the budget's deterministic errors as given and no noise."""
+    """The run with the budget's deterministic errors as given and no noise.
+
+    Parameters
+    ----------
+    imu : ImuErrors
+        Budget (SI, IMU frame s); its noise and bias instability are dropped.
+    init : InitialErrors
+        Initial errors (rad, m/s, m, ENU), applied as given.
+    record_step : float, optional
+        Output step, s (default: :func:`simulate`'s).
+
+    Returns
+    -------
+    RunSpec
+    """
     return RunSpec(imu.without_noise(), init, None, noise=False, record_step=record_step)

@@ -172,10 +172,12 @@ class Report:
         """Write the complete report directory atomically and return its path.
 
         Everything is rendered into a temporary sibling directory first; only when
-        that succeeds is it renamed to ``out_dir`` (replacing an older report).
+        that succeeds is it renamed to ``out_dir`` (replacing an older inserr report;
+        any other existing, non-empty directory is refused, see
+        :func:`check_report_dir`).
         ``markdown_name`` names the Markdown file (analyses use ``REPORT.md``).
         """
-        target = Path(out_dir).resolve()
+        target = check_report_dir(out_dir)
         target.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.parent))
         try:
@@ -187,11 +189,89 @@ class Report:
                     name, _, png = b.payload
                     (tmp / f"{name}.png").write_bytes(png)
             (tmp / "results.json").write_text(dumps(self.results), encoding="utf-8")
+            (tmp / MARKER).write_text("written by inserr; replaced as a whole on rewrite\n")
             replace_dir(tmp, target)
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
         return target
+
+
+#: Written into every report directory, so that only inserr's own reports are replaced.
+MARKER = ".inserr-report"
+
+
+def is_report_dir(path: Path) -> bool:
+    """Whether ``path`` is a directory that inserr wrote (safe to replace as a whole).
+
+    A directory counts when it holds the marker file, or (reports written before the
+    marker existed) a ``results.json`` beside a ``report.md`` or ``REPORT.md``.
+    """
+    return path.is_dir() and (
+        (path / MARKER).is_file()
+        or (
+            (path / "results.json").is_file()
+            and ((path / "report.md").is_file() or (path / "REPORT.md").is_file())
+        )
+    )
+
+
+def check_report_dir(out_dir: str | os.PathLike, field: str = "--out") -> Path:
+    """Check, before any work, that a report can be written to ``out_dir``.
+
+    :meth:`Report.write` replaces the target directory as a whole, so the target must
+    be new, empty, or an earlier inserr report: never the working directory, one of
+    its parents, a file, or a directory holding anything else.
+
+    Parameters
+    ----------
+    out_dir : str or path
+        The report directory the user asked for.
+    field : str
+        Name of the flag or key reported in the error message.
+
+    Returns
+    -------
+    Path
+        The resolved target.
+
+    Raises
+    ------
+    InputError
+        If writing there would destroy files inserr did not write, or cannot succeed.
+    """
+    from inserr.errors import InputError
+
+    target = Path(out_dir).expanduser().resolve()
+    cwd = Path.cwd().resolve()
+    if target == cwd or target in cwd.parents:
+        raise InputError(
+            field,
+            f"{out_dir!s} is the working directory or one of its parents, which a report "
+            "would replace as a whole",
+            "name a new directory, e.g. --out my_report",
+        )
+    if target.exists() and not target.is_dir():
+        raise InputError(field, f"{out_dir!s} exists and is not a directory", "name a directory")
+    if target.is_dir() and any(target.iterdir()) and not is_report_dir(target):
+        raise InputError(
+            field,
+            f"{out_dir!s} exists and is not an inserr report directory; writing the report "
+            "would replace its contents",
+            "name a new directory, or remove that one first",
+        )
+    for parent in target.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise InputError(
+                    field, f"{parent} is a file, so {out_dir!s} cannot be created", "fix the path"
+                )
+            if not os.access(parent, os.W_OK | os.X_OK):
+                raise InputError(
+                    field, f"no permission to write in {parent}", "choose another path"
+                )
+            break
+    return target
 
 
 def replace_dir(src: Path, target: Path) -> None:

@@ -3,10 +3,10 @@
 Conventions (stated once, tested in ``tests/test_rotations.py``):
 
 * A DCM ``C_a^b`` maps vector components in frame a to frame b: ``v^b = C_a^b v^a``.
-* ``rot_x/rot_y/rot_z(angle)`` are the DCMs ``C_a^b`` of a frame b obtained by
-  turning frame a by ``+angle`` (right hand) about the given axis, expressed as
-  the matrix that maps b-components to a-components: ``rot_z(a) @ [1,0,0]`` is the
-  new x axis in old components. In other words ``rot_z(a) = expm(a [e_z x])``.
+* ``rot_x/rot_y/rot_z(angle)`` are the DCMs ``C_b^a`` of a frame b obtained by
+  turning frame a by ``+angle`` (right hand) about the given axis, i.e. the matrix
+  that maps b-components to a-components: ``rot_z(a) @ [1,0,0]`` is the new x axis
+  in old components. In other words ``rot_z(a) = expm(a [e_z x])``.
 * Body frame b is right-front-up (x right, y forward, z up). Heading (yaw) is
   measured clockwise from north, so a heading rate is a rotation about the ENU up
   axis by ``-heading``. Pitch is about body x (nose up positive), roll about body y
@@ -23,7 +23,15 @@ import numpy as np
 def skew(v: np.ndarray) -> np.ndarray:
     """Cross-product matrix ``[v x]`` such that ``skew(v) @ w == np.cross(v, w)``.
 
-    Accepts shape (3,) or (..., 3) and returns (3, 3) or (..., 3, 3).
+    Parameters
+    ----------
+    v : array_like, shape (3,) or (..., 3)
+        Vector(s), any units, any frame.
+
+    Returns
+    -------
+    ndarray, shape (3, 3) or (..., 3, 3)
+        Skew-symmetric matrix (matrices) in the same units and frame as ``v``.
     """
     v = np.asarray(v, dtype=float)
     out = np.zeros(v.shape[:-1] + (3, 3))
@@ -37,9 +45,19 @@ def skew(v: np.ndarray) -> np.ndarray:
 
 
 def rot_axis(axis: np.ndarray, angle) -> np.ndarray:
-    """DCM ``expm(angle [axis x])`` (Rodrigues) for a unit axis; ``angle`` may be an array.
+    """DCM ``expm(angle [axis x])`` (Rodrigues) of a right-hand turn about ``axis``.
 
-    Returns shape (3, 3) for a scalar angle, (..., 3, 3) for an array of angles.
+    Parameters
+    ----------
+    axis : array_like, shape (3,)
+        Rotation axis; must already be a unit vector (it is not normalised).
+    angle : float or array_like, shape (...)
+        Rotation angle, rad, right hand about ``axis``.
+
+    Returns
+    -------
+    ndarray, shape (3, 3) for a scalar angle, (..., 3, 3) for an array of angles
+        ``C_b^a`` of the turned frame b relative to a (module conventions).
     """
     axis = np.asarray(axis, dtype=float)
     angle = np.asarray(angle, dtype=float)
@@ -50,24 +68,72 @@ def rot_axis(axis: np.ndarray, angle) -> np.ndarray:
 
 
 def rot_x(angle) -> np.ndarray:
-    """Rotation by ``angle`` (rad) about x; see module conventions."""
+    """DCM of a right-hand turn by ``angle`` about the x axis; see module conventions.
+
+    Parameters
+    ----------
+    angle : float or array_like, shape (...)
+        Rotation angle, rad.
+
+    Returns
+    -------
+    ndarray, shape (3, 3) or (..., 3, 3)
+        ``expm(angle [e_x x])``: maps turned-frame components to original-frame ones.
+    """
     return rot_axis(np.array([1.0, 0.0, 0.0]), angle)
 
 
 def rot_y(angle) -> np.ndarray:
-    """Rotation by ``angle`` (rad) about y; see module conventions."""
+    """DCM of a right-hand turn by ``angle`` about the y axis; see module conventions.
+
+    Parameters
+    ----------
+    angle : float or array_like, shape (...)
+        Rotation angle, rad.
+
+    Returns
+    -------
+    ndarray, shape (3, 3) or (..., 3, 3)
+        ``expm(angle [e_y x])``: maps turned-frame components to original-frame ones.
+    """
     return rot_axis(np.array([0.0, 1.0, 0.0]), angle)
 
 
 def rot_z(angle) -> np.ndarray:
-    """Rotation by ``angle`` (rad) about z; see module conventions."""
+    """DCM of a right-hand turn by ``angle`` about the z axis; see module conventions.
+
+    Parameters
+    ----------
+    angle : float or array_like, shape (...)
+        Rotation angle, rad.
+
+    Returns
+    -------
+    ndarray, shape (3, 3) or (..., 3, 3)
+        ``expm(angle [e_z x])``: maps turned-frame components to original-frame ones.
+    """
     return rot_axis(np.array([0.0, 0.0, 1.0]), angle)
 
 
 def body_to_nav(heading, pitch, roll) -> np.ndarray:
-    """``C_b^n`` from heading (clockwise from north), pitch and roll, all rad.
+    """Body-to-navigation DCM ``C_b^n`` from heading, pitch and roll.
 
-    Body frame right-front-up, navigation frame ENU. Broadcasts over arrays.
+    Body frame right-front-up, navigation frame ENU; ``C_b^n = rot_z(-heading) @
+    rot_x(pitch) @ rot_y(roll)``. The three angles broadcast against each other.
+
+    Parameters
+    ----------
+    heading : float or array_like
+        Heading, rad, clockwise from north (of the body y axis).
+    pitch : float or array_like
+        Pitch, rad, about body x, nose up positive.
+    roll : float or array_like
+        Roll, rad, about body y, right wing down positive.
+
+    Returns
+    -------
+    ndarray, shape (3, 3) or (..., 3, 3)
+        ``C_b^n`` (maps body components to ENU components).
     """
     heading, pitch, roll = np.broadcast_arrays(
         np.asarray(heading, float), np.asarray(pitch, float), np.asarray(roll, float)
@@ -76,9 +142,21 @@ def body_to_nav(heading, pitch, roll) -> np.ndarray:
 
 
 def euler_from_dcm(c_bn: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Inverse of :func:`body_to_nav`: (heading, pitch, roll) in rad.
+    """Heading, pitch and roll of a body attitude: the inverse of :func:`body_to_nav`.
 
-    Heading in [0, 2 pi), pitch in [-pi/2, pi/2], roll in (-pi, pi].
+    Parameters
+    ----------
+    c_bn : array_like, shape (3, 3) or (..., 3, 3)
+        Body-to-ENU DCM ``C_b^n``.
+
+    Returns
+    -------
+    heading : ndarray, shape (...)
+        Heading, rad, clockwise from north, in [0, 2 pi).
+    pitch : ndarray, shape (...)
+        Pitch, rad, in [-pi/2, pi/2].
+    roll : ndarray, shape (...)
+        Roll, rad, in [-pi, pi] (``arctan2`` range).
     """
     c = np.asarray(c_bn, dtype=float)
     pitch = np.arcsin(np.clip(c[..., 2, 1], -1.0, 1.0))
@@ -88,16 +166,38 @@ def euler_from_dcm(c_bn: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def heading_of(c_sn: np.ndarray) -> np.ndarray:
-    """Heading (rad, clockwise from north, in [0, 2 pi)) of a frame's level-projected y axis."""
+    """Heading of a frame's y axis projected onto the local level plane.
+
+    Parameters
+    ----------
+    c_sn : array_like, shape (3, 3) or (..., 3, 3)
+        DCM from the frame (IMU s or body b) to ENU, e.g. ``C_s^n``.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Heading, rad, clockwise from north, in [0, 2 pi).
+    """
     c = np.asarray(c_sn, dtype=float)
     return np.mod(np.arctan2(c[..., 0, 1], c[..., 1, 1]), 2.0 * np.pi)
 
 
 def log_so3(c: np.ndarray) -> np.ndarray:
-    """Rotation vector ``phi`` with ``rot_axis(phi/|phi|, |phi|) == c``; (..., 3, 3) -> (..., 3).
+    """Rotation vector ``phi`` of a DCM: the inverse of ``rot_axis(phi/|phi|, |phi|)``.
 
     Accurate for angles up to just below pi, which is all the schedule needs (a
     rotation over one sub-step is a few degrees at most).
+
+    Parameters
+    ----------
+    c : array_like, shape (3, 3) or (..., 3, 3)
+        Rotation matrix (matrices).
+
+    Returns
+    -------
+    ndarray, shape (3,) or (..., 3)
+        Rotation vector, rad, with ``c = expm([phi x])`` (an eigen-axis of ``c``:
+        ``c @ phi == phi``; for ``C_{k+1} C_k^T`` of two ``C_s^n`` it is ENU-resolved).
     """
     c = np.asarray(c, dtype=float)
     w = 0.5 * np.stack(

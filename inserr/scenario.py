@@ -25,6 +25,9 @@ from inserr.imu import ImuErrors, InitialErrors
 from inserr.motion import HeadingHistory, Motion, Turn, YawSwing
 from inserr.units import DEG, parse_quantity
 
+#: Largest number of samples (or sub-step segments) one run keeps in memory.
+MAX_SAMPLES = 3_000_000
+
 #: Schema: section -> key -> (kind, size, default). kind is a units kind, or
 #: "str", "float", "list", "table-list". size: None = scalar, 3 = axes, 6 = misalignments.
 SCHEMA: dict[str, dict[str, tuple[str, int | None, Any]]] = {
@@ -220,6 +223,12 @@ def load_scenario(path: str | Path) -> Scenario:
         raise InputError(str(path), "scenario file not found", "check the path")
     try:
         data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except UnicodeDecodeError as exc:
+        raise InputError(
+            str(path),
+            f"not a UTF-8 text file (byte {exc.start}: {exc.reason})",
+            "save the scenario as UTF-8 TOML",
+        ) from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(
             str(path), f"malformed TOML ({exc})", "fix the syntax at that line"
@@ -257,12 +266,19 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
     )
     duration = sc["duration"]
     if duration <= 0:
-        raise InputError("scenario.duration", f"must be > 0, got {duration:g} s", "give e.g. 72 h")
+        raise InputError(
+            "scenario.duration", f"must be > 0, got {duration / 3600:g} h", "give e.g. 72 h"
+        )
     if si["earth"] not in ("ellipsoid", "spherical"):
         raise InputError(
             "site.earth", f"unknown Earth model {si['earth']!r}", "use ellipsoid or spherical"
         )
-    site = Site(si["latitude"], si["longitude"], si["height"], spherical=si["earth"] == "spherical")
+    try:
+        site = Site(
+            si["latitude"], si["longitude"], si["height"], spherical=si["earth"] == "spherical"
+        )
+    except InputError as exc:
+        raise InputError(f"site.{exc.field}", exc.problem, exc.fix) from None
     try:
         imu = ImuErrors(
             gyro_bias=im["gyro_bias"],
@@ -290,6 +306,23 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
     for key in ("step", "covariance_step", "substep"):
         if out[key] <= 0:
             raise InputError(f"output.{key}", "must be > 0", "give e.g. 1 s")
+    # The engine keeps every output sample (and, under continuous motion, every
+    # sub-step segment) in memory: about 1.3 MB per hour at 1 s, so 30 days at 1 s
+    # is ~1 GB. Refuse beyond that before any work, with the fix.
+    grids = [("step", out["step"]), ("covariance_step", out["covariance_step"])]
+    if not motion.is_static:
+        grids.append(("substep", out["substep"]))
+    for key, dt in grids:
+        flag = "covariance-step" if key == "covariance_step" else key
+        n = duration / dt
+        if n > MAX_SAMPLES:
+            raise InputError(
+                f"output.{key}",
+                f"{duration / 3600:g} h at {dt:g} s is {n:.3g} samples, more than the "
+                f"{MAX_SAMPLES:.3g} kept in memory",
+                f"use a coarser output.{key} (flag --{flag}) of at least "
+                f"{duration / MAX_SAMPLES:.3g} s, or a shorter duration",
+            )
     if out["vertical"] not in ("clamped", "free"):
         raise InputError(
             "output.vertical", f"unknown mode {out['vertical']!r}", "use clamped or free"
@@ -327,8 +360,14 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
         raw=raw,
         base_dir=base_dir,
     )
-    for name in (scen.scheme_name, *scen.compare):
-        scen.scheme(name)  # unknown scheme names fail here, before any work
+    scen.scheme(scen.scheme_name)  # unknown scheme names fail here, before any work
+    for name in scen.compare:
+        try:
+            scen.scheme(name)
+        except InputError as exc:
+            if "unknown scheme" not in exc.problem:
+                raise
+            raise InputError("compare.schemes", exc.problem, exc.fix) from None
     return scen
 
 

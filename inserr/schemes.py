@@ -2,13 +2,15 @@
 
 Every scheme turns a vehicle motion and a duration into a
 :class:`~inserr.table.TableSchedule` with its one method ``plan(motion, duration)``.
-Every scheme starts at t = 0 with a stop at its first position.
+Every scheme starts at t = 0 with a stop at its first position (``heading-isolation``:
+an isolation hold, which is its stop, see :class:`HeadingIsolation`; ``continuous``
+with ``stop = 0`` has no opening stop because none was asked for).
 
 * Open-loop schemes are data: a start position and a cycle of PSINS-style rows
   (gimbal, angle, rotation time, dwell), repeated. ``none``, ``continuous``,
   ``two-position``, ``four-position``, ``four-position-modified``,
-  ``eight-position``, ``sixteen-position`` and ``custom`` differ only in their
-  tables.
+  ``eight-position``, ``sixteen-position`` (the PSINS sixteen-position table),
+  ``sixteen-position-inserr`` and ``custom`` differ only in their tables.
 * Closed-loop schemes decide the next step from the state of the run (the IMU
   heading, which depends on the vehicle's yaw): ``flexible-two-position`` (P0's
   rule, threshold or zero-crossing stop test), ``heading-isolation``, and
@@ -98,7 +100,7 @@ class TableScheme:
         """Repeat the table until ``duration`` (the last segment may run past it)."""
         b = ScheduleBuilder(*self.start, mounting=self.mounting)
         if not self.steps:
-            b.stop(duration, self.start_label)
+            b.stop(duration, f"stop {self.start_label}")
             return b.build()
         b.stop(self.first_dwell, f"stop {self.start_label}")
         while b.t < duration:
@@ -167,18 +169,44 @@ def four_position(rate: float, stop: float, modified: bool = False) -> TableSche
     return TableScheme(name, steps, rate, stop + extra, start=(-135 * DEG, 0.0), start_label="A")
 
 
-# Dual-axis sequences: 180 deg turns of the outer (azimuth, z) and inner (x) gimbals.
-# Eight-position: z+ x+ z+ x+ z- x- z- x-, the order commonly reproduced in the
-# dual-axis rotation literature after Yuan, Liao & Han, "Error compensation of an
-# optical gyro INS by multi-axis rotation", Meas. Sci. Technol. 23, 025102 (2012).
-# Its cycle integral of C_s^n vanishes for all three axes, rotation phases included,
-# and each gimbal's net turn is zero, so the scale-factor x rate terms cancel; the
-# misalignment x rate terms do not (tests/test_cycle.py).
-# Sixteen-position: the eight-position order followed by the same order started on
-# the inner gimbal (x+ z+ x+ z+ x- z- x- z-). inserr chose this completion by an
-# exhaustive search over +-180 deg turn sequences as one that also cancels the
-# misalignment x rate terms, which is the stated purpose of 16-position schemes;
-# the cancellation is verified in closed form in tests, not taken on trust.
+# Dual-axis sequences: 180 deg turns of the outer (azimuth, body z) and inner (x) gimbals.
+# Sources (see docs/schemes.md, "Sources of the dual-axis sequences"):
+# * sixteen-position is the sixteen-row table of the PSINS toolbox demo
+#   demos/test_RSINS_2_axis.m (Gongmin Yan, Northwestern Polytechnical University;
+#   file dated 07/09/2024, release "PSINS 2024.11.09", github.com/WangShanpeng/PSINS),
+#   taken as tabulated, before that file's own "improved-16" reordering of rows 9-16.
+# * eight-position and sixteen-position-inserr are inserr's own orders. No published
+#   text of an eight-position dual-axis sequence was found; the text of Yuan, Liao & Han,
+#   Meas. Sci. Technol. 23 (2012) 025102, often cited for a sixteen-sequence scheme, was
+#   not available, so no sequence here is attributed to it.
+# Every property claimed below is checked in closed form in tests/test_cycle.py.
+
+#: PSINS demos/test_RSINS_2_axis.m, rows 1-16: (IMU axis, sign of the 180 deg turn).
+#: PSINS turns about the IMU's own axes (attrottt: C_b^n <- C_b^n rv2m(U angle)); see
+#: :func:`_imu_axis_steps` for the translation to gimbal turns. The demo then relabels
+#: x as y ("change to Y-Z"), a choice of which IMU axis lies on the inner gimbal.
+PSINS_SIXTEEN = (
+    ("z", +1),
+    ("x", -1),
+    ("z", +1),
+    ("x", -1),
+    ("x", -1),
+    ("z", +1),
+    ("x", -1),
+    ("z", +1),
+    ("z", -1),
+    ("x", +1),
+    ("z", -1),
+    ("x", +1),
+    ("x", +1),
+    ("z", -1),
+    ("x", +1),
+    ("z", -1),
+)
+# Eight-position (inserr's order, gimbal turns): z+ x+ z+ x+ z- x- z- x-. Its cycle
+# integral of C_s^n vanishes for all three axes, rotation phases included, and each
+# gimbal's net turn is zero, so the scale-factor x rate terms cancel; the misalignment x
+# rate terms do not.
 _EIGHT = (
     ("outer", +1),
     ("inner", +1),
@@ -189,6 +217,10 @@ _EIGHT = (
     ("outer", -1),
     ("inner", -1),
 )
+# sixteen-position-inserr: the eight-position order followed by the same order started on
+# the inner gimbal, found by an exhaustive search over +-180 deg gimbal-turn sequences as
+# one that also cancels the misalignment x rate terms while each gimbal stays within one
+# revolution (0..360 deg).
 _EIGHT_INNER_FIRST = (
     ("inner", +1),
     ("outer", +1),
@@ -205,17 +237,68 @@ def _dual_axis_steps(seq, stop: float, prefix: str) -> list[Step]:
     return [Step(g, s * math.pi, stop, label=f"{prefix}{i + 1}") for i, (g, s) in enumerate(seq)]
 
 
+def _imu_axis_steps(seq, stop: float, prefix: str = "P") -> list[Step]:
+    """Gimbal steps of a table of 180 deg turns about the IMU's own x and z axes.
+
+    With the IMU mounted square on the inner gimbal (``C_s^b = rot_z(a) rot_x(b)``), a
+    turn about IMU x is a turn of the inner gimbal, and a turn by ``t`` about IMU z is
+    a turn of the outer gimbal by ``t cos b`` (``b`` a multiple of 180 deg here), since
+    ``rot_x(b) rot_z(t) = rot_z(t cos b) rot_x(b)``.
+    """
+    b = 0.0
+    steps = []
+    for i, (axis, sign) in enumerate(seq):
+        angle = sign * math.pi
+        if axis == "x":
+            steps.append(Step("inner", angle, stop, label=f"{prefix}{i + 1}"))
+            b += angle
+        else:
+            steps.append(Step("outer", round(math.cos(b)) * angle, stop, label=f"{prefix}{i + 1}"))
+    return steps
+
+
 def eight_position(rate: float, stop: float) -> TableScheme:
-    """Dual-axis eight-position cycle (see module comment for the order and source)."""
+    """Dual-axis eight-position cycle, gimbal turns z+ x+ z+ x+ z- x- z- x- (inserr's order).
+
+    No published text of an eight-position dual-axis sequence was found
+    (``docs/schemes.md``); the order is inserr's. It cancels the cycle integral of
+    ``C_s^n`` on all three axes and the scale-factor x rate terms, not the
+    misalignment x rate terms.
+    """
     return TableScheme(
         "eight-position", tuple(_dual_axis_steps(_EIGHT, stop, "P")), rate, stop, start_label="P0"
     )
 
 
 def sixteen_position(rate: float, stop: float) -> TableScheme:
-    """Dual-axis sixteen-position: eight-position, then the same started on the inner gimbal."""
-    steps = _dual_axis_steps(_EIGHT, stop, "P") + _dual_axis_steps(_EIGHT_INNER_FIRST, stop, "Q")
+    """Dual-axis sixteen-position cycle of the PSINS toolbox (Gongmin Yan).
+
+    Source: ``demos/test_RSINS_2_axis.m`` of PSINS (Northwestern Polytechnical
+    University; file dated 07/09/2024, release "PSINS 2024.11.09",
+    github.com/WangShanpeng/PSINS), its table of sixteen 180 deg turns about the IMU's
+    own axes, rows 1-16 as tabulated (before the file's "improved-16" reordering):
+    z+ x- z+ x- x- z+ x- z+ z- x+ z- x+ x+ z- x+ z- (:data:`PSINS_SIXTEEN`). In gimbal
+    turns (:func:`_imu_axis_steps`): outer +, inner -, outer -, inner -, inner -,
+    outer -, inner -, outer +, outer -, inner +, outer +, inner +, inner +, outer +,
+    inner +, outer -. PSINS stops ``T0`` before and ``T1`` after each turn; here each
+    position is held ``stop`` once.
+
+    The cycle integral of ``C_s^n``, the scale-factor x rate and the misalignment x
+    rate integrals all vanish; the inner gimbal travels 720 deg (0 to -720 and back).
+    """
+    steps = _imu_axis_steps(PSINS_SIXTEEN, stop)
     return TableScheme("sixteen-position", tuple(steps), rate, stop, start_label="P0")
+
+
+def sixteen_position_inserr(rate: float, stop: float) -> TableScheme:
+    """inserr's sixteen-position order: eight-position, then the same started on the inner gimbal.
+
+    Same exact cancellations as :func:`sixteen_position` with each gimbal kept within
+    one revolution (0..360 deg), at the price of larger cycle means of the rate
+    terms (``docs/schemes.md``).
+    """
+    steps = _dual_axis_steps(_EIGHT, stop, "P") + _dual_axis_steps(_EIGHT_INNER_FIRST, stop, "Q")
+    return TableScheme("sixteen-position-inserr", tuple(steps), rate, stop, start_label="P0")
 
 
 # ---------------------------------------------------------------------------------------
@@ -224,6 +307,18 @@ def sixteen_position(rate: float, stop: float) -> TableScheme:
 def _imu_heading(motion: Motion, t: np.ndarray, a: np.ndarray, mounting) -> np.ndarray:
     """IMU heading (rad) of a single-axis table at outer angle ``a`` on ``motion``, times ``t``."""
     return motion.heading_at(t) + imu_heading_offset(motion.tilt, a, 0.0, mounting)
+
+
+def _best_sample(score: np.ndarray, ok: np.ndarray, rtol: float = 1e-9) -> int:
+    """Index of the smallest ``score`` among ``ok`` samples (all if none), earliest of ties.
+
+    Values within ``rtol`` (relative to the score's range, at least 1e-12) of the
+    minimum count as ties, so round-off cannot pick a later sample of a flat score.
+    """
+    pool = np.flatnonzero(ok) if np.any(ok) else np.arange(len(score))
+    vals = score[pool]
+    tol = max(1e-12, rtol * float(np.ptp(score)))
+    return int(pool[np.flatnonzero(vals <= vals.min() + tol)[0]])
 
 
 @dataclass(frozen=True)
@@ -241,14 +336,28 @@ class FlexibleTwoPosition:
     4. stop ``Ts``; turn -180 deg.
 
     ``variant="crossing"`` replaces the ``< delta`` test by a sign change of the
-    expression between samples (with the same sign condition).
+    expression between samples (with the same sign condition). A sum that vanishes
+    to round-off (``|S| <= 1e-9 f Ts``, e.g. when every stop spans whole revolutions
+    of the IMU heading, as on a vehicle turning at 6 deg/s with 300 s stops) sets no
+    sign condition: its sign would be noise.
 
-    Fallback (the rule can fail: ``|Sc/(f Ts)| > 1`` has no root, and a yawing
-    vehicle can carry psi past the window): if no sample of the first full turn
-    passes the test, the table keeps turning and stops at the first sample that
-    meets the sign condition with ``|expression|`` within ``delta`` of the smallest
-    value seen in the first turn; after a second full turn it stops at once. Each
-    fallback is counted in ``meta["fallbacks"]``.
+    Fallback. The rule can fail: ``|Sc/(f Ts)| > 1`` has no root, and a yawing
+    vehicle can carry psi past the window or hold it still (a vehicle turning at
+    the table rate in the table's direction freezes psi for the whole turn). If no
+    sample of one full turn (360 deg of table angle) passes the test, the table
+    stops at the *best* sample of that turn instead of turning again: the one with
+    the smallest ``|expression|`` among the samples that meet the sign condition (all
+    samples if none does), the earliest (shortest turn) among equal values. A
+    fallback turn is therefore always shorter than 360 deg, and it stops where the
+    next stop cancels as much of the residue as one turn can reach. Choosing the
+    best sample needs the IMU heading over the coming turn: the planner reads it
+    from the vehicle motion, i.e. it assumes the heading over one turn (60 s at
+    6 deg/s) is predictable; the regular stop test uses only the present sample.
+    (The earlier fallback kept turning into a second revolution: 16 fallback turns of
+    360.06 to 720 deg in 6 h of a steady 6 deg/s vehicle turn; comparison in
+    ``docs/schemes.md``.) Fallback
+    turns are labelled ``"variable turn (fallback)"`` and counted in
+    ``meta["fallbacks"]``.
 
     Psi_imu is the true IMU heading (the INS's own heading differs by its heading
     error, arc-minutes, which does not move a 0.01 threshold).
@@ -281,30 +390,24 @@ class FlexibleTwoPosition:
         """Turn until the stop test passes; returns True if the fallback was used."""
         w = self.rate
         per_turn = int(math.ceil(2 * math.pi / w * self.f))
-        j = np.arange(1, 2 * per_turn + 1)
+        j = np.arange(1, per_turn + 1)
         t = b.t + j / self.f
         a = b.a + direction * w * j / self.f
         h = _imu_heading(motion, t, a, self.mounting)
         main, other = (np.cos(h), np.sin(h)) if which == 0 else (np.sin(h), np.cos(h))
-        expr = main + sums[which] / (self.f * self.stop)
-        s_other = np.sign(sums[1 - which])
+        scale = self.f * self.stop
+        expr = main + sums[which] / scale
+        # A sum that is zero to round-off sets no sign condition (see the class docstring).
+        s_other = np.sign(sums[1 - which]) if abs(sums[1 - which]) > 1e-9 * scale else 0.0
         sign_ok = (np.sign(other) == -s_other) | (s_other == 0)
         if self.variant == "threshold":
             hit = (np.abs(expr) < self.delta) & sign_ok
         else:
             prev = np.concatenate([[expr[0]], expr[:-1]])
             hit = (np.sign(expr) != np.sign(prev)) & sign_ok
-        first = np.flatnonzero(hit[:per_turn])
-        fallback = False
-        if len(first):
-            n = first[0] + 1
-        else:
-            fallback = True
-            best = np.min(np.abs(expr[:per_turn]) + np.where(sign_ok[:per_turn], 0.0, np.inf))
-            late = np.flatnonzero(
-                (np.abs(expr[per_turn:]) <= best + self.delta) & sign_ok[per_turn:]
-            )
-            n = per_turn + (late[0] + 1 if len(late) else per_turn)
+        first = np.flatnonzero(hit)
+        fallback = not len(first)
+        n = first[0] + 1 if len(first) else _best_sample(np.abs(expr), sign_ok) + 1
         b.rotate(
             "outer",
             direction * w * n / self.f,
@@ -348,6 +451,19 @@ class HeadingIsolation:
     outer-gimbal angle of :func:`inserr.table.isolation_angle`. The motor therefore
     runs continuously; every reversal of the table rate counts as a motor start
     (``meta["isolation_reversals"]``).
+
+    Why the run opens with an isolation *hold* (``kind == "isolate"``, label
+    ``"hold 0"``, target rate 0) and not a literal stop: a stop is the phase in which
+    the IMU keeps one orientation, so that a bias projects onto a fixed
+    navigation-frame direction. Every other scheme gets that by freezing the gimbals
+    because its navigation-frame attitude changes only with the vehicle; this scheme
+    exists to remove the vehicle's yaw, so its stop freezes the IMU *heading* and the
+    table absorbs the yaw. The hold starts at t = 0 at the first position (table
+    angle 0, IMU heading ``h0`` = the vehicle's heading at t = 0 plus the mounting
+    offset) and lasts ``stop``; on a vehicle that does not yaw it is a literal stop
+    (the table angle stays constant, ``tests/test_schedule.py``). Freezing the
+    gimbals instead would let the first position swing with the yaw, which is
+    exactly what the scheme is built to prevent.
     """
 
     rate: float
@@ -423,6 +539,7 @@ SCHEMES = (
     "nulling-two-position",
     "eight-position",
     "sixteen-position",
+    "sixteen-position-inserr",
     "custom",
 )
 
@@ -472,6 +589,8 @@ def build_scheme(name: str, rate: float, stop: float, **options):
         s = eight_position(rate, stop)
     elif name == "sixteen-position":
         s = sixteen_position(rate, stop)
+    elif name == "sixteen-position-inserr":
+        s = sixteen_position_inserr(rate, stop)
     elif name == "flexible-two-position":
         return FlexibleTwoPosition(rate, stop, mounting=mounting, **options)
     elif name == "heading-isolation":

@@ -42,7 +42,19 @@ class Source:
 
 
 def layout_for(imu: ImuErrors) -> Layout:
-    """The smallest augmented layout that carries every error of ``imu``."""
+    """The smallest augmented layout that carries every error of ``imu``.
+
+    Parameters
+    ----------
+    imu : ImuErrors
+        The IMU error budget.
+
+    Returns
+    -------
+    Layout
+        Biases always; scale factor/misalignment and Gauss-Markov states only if
+        ``imu`` has them.
+    """
     return Layout(
         bias=True,
         scale_misalignment=imu.has_scale_misalignment,
@@ -53,7 +65,26 @@ def layout_for(imu: ImuErrors) -> Layout:
 def constant_sources(
     imu: ImuErrors, init: InitialErrors, vertical: str = "clamped"
 ) -> list[Source]:
-    """All non-zero constant error sources, in a fixed order."""
+    """All non-zero constant error sources, in a fixed order.
+
+    Order: gyro bias, accelerometer bias, gyro scale factor, gyro misalignment,
+    accelerometer scale factor, accelerometer misalignment (IMU axes x, y, z), then
+    initial attitude, velocity and position (E, N, U).
+
+    Parameters
+    ----------
+    imu : ImuErrors
+        Constant IMU errors, SI, IMU frame.
+    init : InitialErrors
+        Initial attitude (rad), velocity (m/s) and position (m) errors, ENU.
+    vertical : {"clamped", "free"}
+        With ``"clamped"`` the vertical velocity and position errors are dropped.
+
+    Returns
+    -------
+    list of Source
+        One per non-zero component, value in SI.
+    """
     out: list[Source] = []
 
     def add(group: str, labels, values) -> None:
@@ -80,9 +111,18 @@ def unit_column(model: ErrorModel, source: Source, c_sn0: np.ndarray) -> np.ndar
     Parameters
     ----------
     model : ErrorModel
+        Supplies the layout and the site (for the position-error angle).
     source : Source
+        The error source; only its group and axis label are used, not its value.
     c_sn0 : (3, 3)
-        IMU-to-navigation DCM at t = 0: IMU-frame errors are resolved in n with it.
+        IMU-to-navigation DCM ``C_s^n`` at t = 0: IMU-frame errors are resolved in n
+        with it (``C_s^n e`` for biases, ``C_s^n K C_n^s`` for K matrices).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Initial augmented state. An initial position error also sets
+        ``psi = -dtheta`` so that the true attitude error ``phi`` stays zero.
     """
     lay = model.layout
     x = np.zeros(lay.n)
@@ -120,7 +160,21 @@ def unit_column(model: ErrorModel, source: Source, c_sn0: np.ndarray) -> np.ndar
 
 
 def source_matrix(model: ErrorModel, sources: list[Source], c_sn0: np.ndarray) -> np.ndarray:
-    """Unit columns of all sources, shape (n, N)."""
+    """Unit columns of all sources side by side.
+
+    Parameters
+    ----------
+    model : ErrorModel
+    sources : list of Source
+        N sources (e.g. from :func:`constant_sources`).
+    c_sn0 : (3, 3)
+        IMU-to-navigation DCM ``C_s^n`` at t = 0.
+
+    Returns
+    -------
+    ndarray, shape (n, N)
+        Column j is :func:`unit_column` of ``sources[j]`` (shape (n, 0) for none).
+    """
     if not sources:
         return np.zeros((model.layout.n, 0))
     return np.column_stack([unit_column(model, s, c_sn0) for s in sources])

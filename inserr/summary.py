@@ -157,7 +157,12 @@ def build_report(scen: Scenario, runs: list[SchemeRun], title: str | None = None
         "(DRMS) horizontal error from ARW/VRW/bias instability at the end."
     )
     results = {r.name: r.result for r in runs}
-    rep.figure(plots.horizontal_error(results), "horizontal_error", "Horizontal position error")
+    rep.figure(
+        plots.horizontal_error(results),
+        "horizontal_error",
+        "Horizontal position error, one panel per scheme: signs as given (solid), RMS over "
+        "unknown signs (dashed), worst sign pattern (dotted), noise 1-sigma envelope (shaded)",
+    )
     rep.figure(plots.attitude_errors(results), "attitude_errors", "Attitude errors (deterministic)")
     for r in runs:
         rep.heading(f"Error budget: {r.name}", 3)

@@ -38,12 +38,21 @@ A point that is invalid only in combination (``stop=0`` is fine for
 
 Determinism
 -----------
-A point's identity (:attr:`Point.id`) is a hash of the base scenario and the
-point's changes, so a point keeps its identity when the grid grows or is
-reordered (that is what makes resuming safe). Each point gets its own seed,
+A point's identity (:attr:`Point.id`) is a hash of the base scenario, the
+point's changes, the inserr version and the bytes of any file the point's
+scenario reads (the ``motion.file`` heading history), so a point keeps its
+identity when the grid grows or is reordered (that is what makes resuming safe),
+and is computed again when the code or its input data change. Each point gets its own seed,
 derived from the base seed and its changes (unless ``scenario.seed`` is swept),
 so no random state is shared between points and the numbers do not depend on
-which worker ran which point.
+which worker ran which point. The seed does not depend on the inserr version or
+on file contents: a new version recomputes a point with the same random numbers.
+
+Output directory
+----------------
+The default output directory is ``sweep-<slug>``, the slug made from the
+scenario file's stem (or the scenario name when there is no file) with
+:func:`slug`, so it is always a plain directory name.
 """
 
 from __future__ import annotations
@@ -53,6 +62,7 @@ import hashlib
 import itertools
 import json
 import re
+import unicodedata
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -65,6 +75,9 @@ from inserr.units import UNITS, parse_quantity
 UNSWEEPABLE = ("list", "table-list")
 
 _BRACKET = re.compile(r"^\[(?P<inner>[^\[\]]*)\]\s*(?P<unit>.*)$")
+
+#: Units of the two numbers of a ``yaw-swing`` value ``[AMP,PERIOD]``.
+YAW_SWING_UNITS = "deg/s, s"
 
 
 @dataclass(frozen=True)
@@ -94,31 +107,135 @@ class Param:
     def axis(self) -> tuple[list[float] | None, str]:
         """Numeric positions of the values for plots, and the axis label.
 
-        Returns ``(None, name)`` when the values are not all single numbers of one
-        kind (names, x,y,z triples, pairs): plots then space them evenly.
+        Returns
+        -------
+        positions : list of float or None
+            Each value as a number in the unit of the label (e.g. seconds for
+            ``stop=1 min,300``), or None when the values are not all single
+            numbers of one kind (names, x,y,z triples, pairs): plots then space
+            them evenly.
+        label : str
+            The name, with the unit of the positions when they have one
+            (``"stop (s)"``).
         """
+        nums, unit = self._numeric()
+        return nums, f"{self.name} ({unit})" if nums is not None and unit else self.name
+
+    def _numeric(self) -> tuple[list[float] | None, str]:
+        """Numeric positions of the values and their unit (``""`` for unit-less numbers)."""
         if self.key is None:
-            return None, self.name
+            return None, ""
         section, _, k = self.key.partition(".")
         kind, _, _ = SCHEMA[section][k]
         if kind in ("float", "int"):
             try:
-                return [float(v) for v in self.values], self.name
+                return [float(v) for v in self.values], ""
             except ValueError:
-                return None, self.name
+                return None, ""
         if kind not in UNITS or any("[" in v for v in self.values):
-            return None, self.name
+            return None, ""
         unit = self.unit or _written_unit(self.values[0])
         if unit not in UNITS[kind]:
-            return None, self.name
+            return None, ""
         try:
             nums = [
                 float(parse_quantity(v, kind, self.name, default_unit=unit)) / UNITS[kind][unit]
                 for v in self.values
             ]
         except InputError:
-            return None, self.name
-        return nums, f"{self.name} ({unit})" if unit else self.name
+            return None, ""
+        return nums, unit
+
+    def unit_of(self, value: str) -> str | None:
+        """Unit a value is written in: its own unit, else the flag's unit for bare numbers.
+
+        Parameters
+        ----------
+        value : str
+            One of :attr:`values`, as written (``"60"``, ``"1 min"``, ``"[1,2,3] deg/h"``).
+
+        Returns
+        -------
+        str or None
+            ``"min"`` for ``"1 min"``; the flag's unit (``"s"`` for ``stop``) for a
+            bare number or bracketed numbers; :data:`YAW_SWING_UNITS` for a bare
+            ``yaw-swing`` pair; None for words and unit-less numbers.
+        """
+        inner, written = value, _written_unit(value)
+        m = _BRACKET.match(value)
+        if m:
+            inner, written = m.group("inner"), m.group("unit").strip()
+        if written:
+            return written
+        if not all(_is_number(x) for x in inner.split(",")):
+            return None  # a word, or bracketed parts that carry their own units
+        return YAW_SWING_UNITS if self.name == "yaw-swing" else self.unit
+
+    def unit_shown(self) -> str:
+        """Unit to print next to the parameter's name on a plot (``""`` for none).
+
+        Returns
+        -------
+        str
+            The unit of :meth:`axis` positions when the values are numeric; else
+            the unit shared by all values, or the flag's unit if some values are
+            bare numbers; else ``""`` (names, unit-less numbers, mixed units).
+        """
+        nums, unit = self._numeric()
+        if nums is not None:
+            return unit
+        units = {self.unit_of(v) for v in self.values}
+        if len(units) == 1:
+            return next(iter(units)) or ""
+        return self.unit if self.unit in units else ""
+
+    def label(self) -> str:
+        """Axis label: the name and, where one applies, the unit (``"rate (deg/s)"``).
+
+        Returns
+        -------
+        str
+        """
+        unit = self.unit_shown()
+        return f"{self.name} ({unit})" if unit else self.name
+
+    def ticks(self) -> list[str]:
+        """Tick text of each value, in the unit of :meth:`label`.
+
+        Returns
+        -------
+        list of str
+            Numbers in the label's unit when the values are numeric (``"60"`` for
+            ``1 min`` under ``stop (s)``); otherwise each value as written, without
+            its unit when that is the label's unit.
+        """
+        nums, _ = self._numeric()
+        if nums is not None:
+            return [f"{n:g}" for n in nums]
+        unit = self.unit_shown()
+        out = []
+        for v in self.values:
+            written = m.group("unit").strip() if (m := _BRACKET.match(v)) else _written_unit(v)
+            if unit and written == unit:
+                v = v[: len(v) - len(written)].rstrip()
+            out.append(v)
+        return out
+
+    def value_texts(self) -> list[str]:
+        """Each value with its unit, for titles (``"20 deg"``, ``"[6,60] (deg/s, s)"``).
+
+        Returns
+        -------
+        list of str
+        """
+        unit = self.unit_shown()
+        if not unit:
+            return list(self.ticks())
+        suffix = f" ({unit})" if "," in unit else f" {unit}"
+        return [
+            t + suffix if t != v or self.unit_of(v) == unit else t
+            for t, v in zip(self.ticks(), self.values, strict=True)
+        ]
 
 
 @dataclass(frozen=True)
@@ -134,8 +251,10 @@ class Point:
     changes : dict
         Dotted scenario key -> raw value, including the point's ``scenario.seed``.
     id : str
-        Stable identity: hash of the base scenario and the changes.
+        Stable identity: hash of the base scenario, the changes, the inserr
+        version and the bytes of any file the point's scenario reads.
     seed : int
+        Seed of the point's random numbers (see :func:`point_identity`).
     error : str
         Empty, or why this combination is not a valid scenario (status ``invalid``).
     """
@@ -150,7 +269,17 @@ class Point:
 
 @dataclass(frozen=True)
 class Grid:
-    """A validated sweep: base scenario, parameters and points (in grid order)."""
+    """A validated sweep: base scenario, parameters and points (in grid order).
+
+    Attributes
+    ----------
+    base : Scenario
+        The scenario every point changes.
+    params : tuple of Param
+        The swept parameters, first one slowest in :attr:`points`.
+    points : tuple of Point
+        Every combination of values, in Cartesian order.
+    """
 
     base: Scenario
     params: tuple[Param, ...]
@@ -158,11 +287,29 @@ class Grid:
 
     @property
     def shape(self) -> tuple[int, ...]:
-        """Number of values of each parameter."""
+        """Number of values of each parameter.
+
+        Returns
+        -------
+        tuple of int
+            One entry per parameter; the product is the number of points.
+        """
         return tuple(len(p.values) for p in self.params)
 
     def payload(self, point: Point) -> str:
-        """What a worker needs to run ``point``, as JSON text (opaque to Dask's graph)."""
+        """What a worker needs to run ``point``, as JSON text (opaque to Dask's graph).
+
+        Parameters
+        ----------
+        point : Point
+            A point of this grid.
+
+        Returns
+        -------
+        str
+            JSON with the point's id, the base scenario (raw values and directory)
+            and the point's changes; :func:`inserr.sweep_run.run_point` reads it.
+        """
         return json.dumps(
             {
                 "id": point.id,
@@ -175,7 +322,25 @@ class Grid:
 
 
 def split_values(text: str, name: str) -> list[str]:
-    """Split ``"60,300"`` or ``"[1,2,3] deg/h,0.5 deg/h"`` into values (commas in brackets stay)."""
+    """Split ``"60,300"`` or ``"[1,2,3] deg/h,0.5 deg/h"`` into values (commas in brackets stay).
+
+    Parameters
+    ----------
+    text : str
+        The part of ``--param`` after ``=``.
+    name : str
+        The parameter's name, for error messages.
+
+    Returns
+    -------
+    list of str
+        The values, stripped, in the order written.
+
+    Raises
+    ------
+    InputError
+        Empty list or value, duplicated values, nested or unbalanced brackets.
+    """
     items: list[str] = []
     depth = 0
     cur: list[str] = []
@@ -230,8 +395,17 @@ def _unbracket(value: str, name: str) -> str:
 
 
 def _written_unit(value: str) -> str:
-    m = re.match(r"^\s*[-+0-9.eE]+\s*(.*)$", value)
-    return m.group(1).strip() if m else ""
+    """Unit written after a number (``"1 min"`` -> ``"min"``; ``""`` for none or a word)."""
+    m = re.match(r"^\s*([-+0-9.eE]+)\s*(.*)$", value)
+    return m.group(2).strip() if m and _is_number(m.group(1)) else ""
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _flatten(nested: dict[str, dict[str, Any]]) -> dict[str, Any]:
@@ -240,6 +414,16 @@ def _flatten(nested: dict[str, dict[str, Any]]) -> dict[str, Any]:
 
 def parse_param(text: str) -> Param:
     """Parse one ``NAME=V1,V2,...`` (see the module docstring for the value syntax).
+
+    Parameters
+    ----------
+    text : str
+        One ``--param`` argument, e.g. ``"stop=60,300"`` (bare numbers in the
+        flag's unit, here seconds) or ``"scheme.stop=60 s,5 min"``.
+
+    Returns
+    -------
+    Param
 
     Raises
     ------
@@ -303,13 +487,79 @@ def _canonical(obj: Any) -> str:
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), default=str)
 
 
-def point_identity(base: Scenario, changes: dict[str, Any]) -> tuple[str, int]:
-    """(id, seed) of the point ``changes`` of ``base``: hashes, independent of grid order."""
+def point_identity(
+    base: Scenario, changes: dict[str, Any], *, digests: dict[Path, str] | None = None
+) -> tuple[str, int]:
+    """Identity and seed of the point ``changes`` of ``base``, independent of grid order.
+
+    Parameters
+    ----------
+    base : Scenario
+        The base scenario.
+    changes : dict
+        Dotted scenario key -> raw value set by the point (without its seed).
+    digests : dict, optional
+        Cache of file digests (path -> SHA-256), shared by the points of one grid
+        so that a heading-history file is read once.
+
+    Returns
+    -------
+    id : str
+        16 hex digits: SHA-256 of the base scenario, the changes, the inserr
+        version and the bytes of the file the point's scenario reads, if any
+        (:func:`referenced_files`). A new version or an edited file gives a new
+        id, so a resumed sweep computes the point again.
+    seed : int
+        32-bit seed from the base seed and the changes only, so that the random
+        numbers of a point do not change with the version or the file.
+    """
+    import inserr
+
+    files = {}
+    for path in referenced_files(base, changes):
+        if digests is not None and path in digests:
+            files[str(path)] = digests[path]
+            continue
+        try:
+            digest = hashlib.sha256(path.read_bytes()).hexdigest()
+        except OSError as exc:
+            digest = f"unreadable: {type(exc).__name__}"  # the point is invalid anyway
+        if digests is not None:
+            digests[path] = digest
+        files[str(path)] = digest
     base_text = _canonical({"raw": base.raw, "dir": base_dir_text(base)})
     change_text = _canonical(changes)
-    pid = hashlib.sha256(f"{base_text}|{change_text}".encode()).hexdigest()[:16]
+    extra = _canonical({"inserr": inserr.__version__, "files": files})
+    pid = hashlib.sha256(f"{base_text}|{change_text}|{extra}".encode()).hexdigest()[:16]
     seed_hash = hashlib.sha256(f"{base.seed}|{change_text}".encode()).digest()
     return pid, int.from_bytes(seed_hash[:4], "big")
+
+
+def referenced_files(base: Scenario, changes: dict[str, Any]) -> list[Path]:
+    """Files the scenario of a point reads: the ``motion.file`` of a heading history.
+
+    Parameters
+    ----------
+    base : Scenario
+        The base scenario (its directory resolves relative file names).
+    changes : dict
+        Dotted scenario key -> raw value set by the point.
+
+    Returns
+    -------
+    list of Path
+        Absolute paths (empty unless ``motion.type`` is ``heading-history`` and
+        ``motion.file`` is set), resolved as :mod:`inserr.scenario` does.
+    """
+    motion = base.raw.get("motion", {})
+    kind = changes.get("motion.type", motion.get("type", SCHEMA["motion"]["type"][2]))
+    name = changes.get("motion.file", motion.get("file", ""))
+    if kind != "heading-history" or not name:
+        return []
+    path = Path(str(name))
+    if base.base_dir is not None and not path.is_absolute():
+        path = Path(base.base_dir) / path
+    return [path.resolve()]
 
 
 def build_grid(base: Scenario, param_texts: list[str]) -> Grid:
@@ -317,6 +567,17 @@ def build_grid(base: Scenario, param_texts: list[str]) -> Grid:
 
     Every point's scenario is built here (cheap next to its analysis) so that bad
     input is reported before any work starts.
+
+    Parameters
+    ----------
+    base : Scenario
+        The scenario every point changes.
+    param_texts : list of str
+        The ``--param NAME=V1,V2,...`` arguments, in order (the last varies fastest).
+
+    Returns
+    -------
+    Grid
 
     Raises
     ------
@@ -342,12 +603,13 @@ def build_grid(base: Scenario, param_texts: list[str]) -> Grid:
                 )
             seen[key] = p.name
     seed_swept = "scenario.seed" in seen
+    digests: dict[Path, str] = {}
     points = []
     for index, combo in enumerate(itertools.product(*(range(len(p.values)) for p in params))):
         changes: dict[str, Any] = {}
         for p, i in zip(params, combo, strict=True):
             changes.update(p.changes[i])
-        pid, seed = point_identity(base, changes)
+        pid, seed = point_identity(base, changes, digests=digests)
         if not seed_swept:
             changes["scenario.seed"] = seed
         else:
@@ -391,7 +653,18 @@ def _reject_hopeless_values(params: tuple[Param, ...], points: list[Point]) -> N
 
 
 def describe_grid(grid: Grid) -> dict[str, Any]:
-    """Plain description of a grid (for the output directory's manifest and JSON output)."""
+    """Plain description of a grid (for the output directory's manifest and JSON output).
+
+    Parameters
+    ----------
+    grid : Grid
+
+    Returns
+    -------
+    dict
+        Base scenario (raw values and directory), parameters with their values,
+        and each point's index, id and values; JSON-serialisable.
+    """
     return {
         "base_scenario": grid.base.raw,
         "base_dir": base_dir_text(grid.base),
@@ -403,5 +676,63 @@ def describe_grid(grid: Grid) -> dict[str, Any]:
 
 
 def base_dir_text(base: Scenario) -> str | None:
-    """Absolute directory of the base scenario file (workers may run in another directory)."""
+    """Absolute directory of the base scenario file (workers may run in another directory).
+
+    Parameters
+    ----------
+    base : Scenario
+
+    Returns
+    -------
+    str or None
+        None when the scenario came from flags only.
+    """
     return str(Path(base.base_dir).resolve()) if base.base_dir is not None else None
+
+
+#: Longest slug :func:`slug` returns (directory names stay readable and portable).
+SLUG_MAX = 60
+
+
+def slug(text: str) -> str:
+    """A safe directory-name part: lowercase ASCII letters, digits, ``-`` and ``_``.
+
+    Accents are dropped (``é`` -> ``e``), every other run of characters (spaces,
+    ``:``, ``,``, ``/``, ``.``) becomes one ``-``, and the result is at most
+    :data:`SLUG_MAX` characters with no leading or trailing ``-``/``_``.
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"sweep-quickstart: 72 h at rest, single- and dual-axis indexing"``.
+
+    Returns
+    -------
+    str
+        E.g. ``"sweep-quickstart-72-h-at-rest-single-and-dual-axis-indexing"``;
+        ``"scenario"`` when nothing usable is left.
+    """
+    ascii_text = unicodedata.normalize("NFKD", text).encode("ascii", "ignore").decode()
+    out = re.sub(r"[^a-z0-9_-]+", "-", ascii_text.lower())
+    out = re.sub(r"-{2,}", "-", out).strip("-_")
+    return out[:SLUG_MAX].rstrip("-_") or "scenario"
+
+
+def default_out_dir(base: Scenario, scenario_file: str | Path | None = None) -> str:
+    """Default output directory of a sweep: ``sweep-<slug>``, relative to the working directory.
+
+    Parameters
+    ----------
+    base : Scenario
+        The base scenario (its name is used when there is no file).
+    scenario_file : str or Path, optional
+        The scenario file given on the command line; its stem names the directory.
+
+    Returns
+    -------
+    str
+        E.g. ``"sweep-quickstart"`` for ``analyses/quickstart/quickstart.toml``,
+        ``"sweep-scenario"`` for a scenario from flags only.
+    """
+    stem = Path(scenario_file).stem if scenario_file else base.name
+    return f"sweep-{slug(stem)}"

@@ -12,7 +12,13 @@
 
 Points that failed or were invalid are blank (grey) cells or gaps in a line. The
 colour or y scale is logarithmic when the values span more than a factor
-:data:`LOG_SPAN`, as errors of different schemes often do.
+:data:`LOG_SPAN`, as errors of different schemes often do. Axis labels carry the
+unit of the values (``stop (s)``: the flag's unit for bare numbers, else the unit
+the values were written in), see :meth:`inserr.sweep.Param.label`.
+
+Every figure carries the PNG text chunk :data:`inserr.sweep_store.FIGURE_MARK`;
+:func:`write_figures` removes the marked figures of earlier results that it did
+not write again, and only those.
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ from matplotlib.colors import LogNorm, Normalize  # noqa: E402
 
 from inserr.report import write_bytes_atomic  # noqa: E402
 from inserr.sweep import Grid, Param  # noqa: E402
+from inserr.sweep_store import FIGURE_MARK, remove_stale_figures  # noqa: E402
 
 LINE_METRICS = (
     ("max_horizontal_error_nmi", "max, signs as given"),
@@ -47,7 +54,22 @@ LOG_SPAN = 20.0
 
 
 def metric_array(grid: Grid, header: list[str], rows: list[list[Any]], metric: str) -> np.ndarray:
-    """Values of ``metric`` on the grid, shape ``grid.shape`` (NaN where there is none)."""
+    """Values of ``metric`` on the grid, shape ``grid.shape`` (NaN where there is none).
+
+    Parameters
+    ----------
+    grid : Grid
+    header, rows
+        The table of :func:`inserr.sweep_store.table`.
+    metric : str
+        A column name, e.g. ``"max_horizontal_error_nmi"``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The metric in the unit of its column (nmi for the error metrics), NaN for
+        points without a number (failed, invalid, pending) or a missing column.
+    """
     out = np.full(len(rows), np.nan)
     if metric in header:
         col = header.index(metric)
@@ -69,10 +91,10 @@ def _norm(values: np.ndarray) -> Normalize:
 
 
 def _positions(p: Param) -> tuple[np.ndarray, list[str] | None, str]:
-    nums, label = p.axis()
+    nums, _ = p.axis()
     if nums is not None:
-        return np.array(nums), None, label
-    return np.arange(len(p.values), dtype=float), list(p.values), label
+        return np.array(nums), None, p.label()
+    return np.arange(len(p.values), dtype=float), p.ticks(), p.label()
 
 
 def _lines(grid: Grid, header: list[str], rows: list[list[Any]]) -> plt.Figure:
@@ -101,15 +123,16 @@ def _lines(grid: Grid, header: list[str], rows: list[list[Any]]) -> plt.Figure:
 def _heatmap(ax, z: np.ndarray, down: Param, across: Param, norm: Normalize) -> Any:
     cmap = plt.get_cmap("viridis").with_extremes(bad="0.85")
     im = ax.imshow(np.ma.masked_invalid(z), norm=norm, cmap=cmap, origin="lower", aspect="auto")
-    ax.set_yticks(range(len(down.values)), down.values, fontsize=7)
+    across_ticks = across.ticks()
+    ax.set_yticks(range(len(down.values)), down.ticks(), fontsize=7)
     ax.set_xticks(
         range(len(across.values)),
-        across.values,
+        across_ticks,
         fontsize=7,
-        rotation=30 if max(map(len, across.values)) > 6 else 0,
+        rotation=30 if max(map(len, across_ticks)) > 6 else 0,
     )
-    ax.set_ylabel(down.name)
-    ax.set_xlabel(across.name)
+    ax.set_ylabel(down.label())
+    ax.set_xlabel(across.label())
     if z.size <= 64:
         for (i, j), v in np.ndenumerate(z):
             text = f"{v:.3g}" if math.isfinite(v) else "x"
@@ -151,7 +174,7 @@ def _facets(
     for ax, combo in zip(axes.flat, shown, strict=False):
         im = _heatmap(ax, z[(slice(None), slice(None), *combo)], down, across, norm)
         ax.set_title(
-            ", ".join(f"{p.name}={p.values[i]}" for p, i in zip(rest, combo, strict=True)),
+            ", ".join(f"{p.name}={p.value_texts()[i]}" for p, i in zip(rest, combo, strict=True)),
             fontsize=8,
         )
     for ax in axes[:, 1:].flat:
@@ -183,7 +206,20 @@ def _swept_keys(grid: Grid) -> set[str]:
 
 
 def figures(grid: Grid, header: list[str], rows: list[list[Any]]) -> dict[str, plt.Figure]:
-    """Summary figures by file stem (see the module docstring for the choice)."""
+    """Summary figures by file stem (see the module docstring for the choice).
+
+    Parameters
+    ----------
+    grid : Grid
+    header, rows
+        The table of :func:`inserr.sweep_store.table` (errors in nmi).
+
+    Returns
+    -------
+    dict of str to matplotlib.figure.Figure
+        ``{"sweep": ...}`` for one or two parameters, one ``sweep_<metric>`` per
+        metric of :data:`MAP_METRICS` for three or more. The caller closes them.
+    """
     n = len(grid.params)
     if n == 1:
         return {"sweep": _lines(grid, header, rows)}
@@ -197,13 +233,42 @@ def figures(grid: Grid, header: list[str], rows: list[list[Any]]) -> dict[str, p
 def write_figures(
     grid: Grid, header: list[str], rows: list[list[Any]], out_dir: Path
 ) -> list[Path]:
-    """Write the summary figures as PNG files in ``out_dir`` (each atomically)."""
-    paths = []
-    for stem, fig in figures(grid, header, rows).items():
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-        plt.close(fig)
-        path = Path(out_dir) / f"{stem}.png"
-        write_bytes_atomic(path, buf.getvalue())
-        paths.append(path)
+    """Write the summary figures as PNG files in ``out_dir`` (each atomically).
+
+    Figures inserr wrote there for earlier results (another grid) and not
+    written again now are removed; if drawing fails, every figure inserr wrote
+    there is removed, so that no figure contradicts ``results.csv``.
+
+    Parameters
+    ----------
+    grid : Grid
+    header, rows
+        The table of :func:`inserr.sweep_store.table`, as in ``results.csv``.
+    out_dir : Path
+        The sweep's output directory.
+
+    Returns
+    -------
+    list of Path
+        The figures written, ``OUT/<stem>.png`` (see :func:`figures`).
+    """
+    paths: list[Path] = []
+    figs: dict[str, plt.Figure] = {}
+    try:
+        figs = figures(grid, header, rows)
+        for stem, fig in figs.items():
+            buf = io.BytesIO()
+            fig.savefig(
+                buf, format="png", dpi=110, bbox_inches="tight", metadata=dict([FIGURE_MARK])
+            )
+            plt.close(fig)
+            path = Path(out_dir) / f"{stem}.png"
+            write_bytes_atomic(path, buf.getvalue())
+            paths.append(path)
+    except BaseException:
+        for fig in figs.values():
+            plt.close(fig)
+        remove_stale_figures(out_dir)
+        raise
+    remove_stale_figures(out_dir, keep=paths)
     return paths

@@ -44,7 +44,15 @@ from inserr.errors import InputError
 from inserr.progress import Bar
 from inserr.report import dumps
 from inserr.sweep import Grid
-from inserr.sweep_store import FAILED, OK, SweepStore, invalid_record, point_record, write_results
+from inserr.sweep_store import (
+    FAILED,
+    OK,
+    SweepStore,
+    invalid_record,
+    point_record,
+    remove_stale_figures,
+    write_results,
+)
 
 LOCAL_SCHEDULERS = ("processes", "threads", "sync")
 
@@ -53,7 +61,13 @@ OnResult = Callable[[str, dict[str, Any]], None]
 
 
 def default_workers() -> int:
-    """CPUs this process may use."""
+    """CPUs this process may use.
+
+    Returns
+    -------
+    int
+        The size of the CPU affinity mask (on Linux), else the CPU count; at least 1.
+    """
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not Linux
@@ -65,7 +79,21 @@ INPUT_ECHOES = ("scheme", "hours")
 
 
 def headline_metrics(metrics: dict[str, Any]) -> dict[str, Any]:
-    """The scalar headline numbers of a run, plus its largest error source."""
+    """The scalar headline numbers of a run, plus its largest error source.
+
+    Parameters
+    ----------
+    metrics : dict
+        ``SchemeRun.metrics()`` of one drift analysis.
+
+    Returns
+    -------
+    dict
+        Its scalar entries (units in their names: ``max_horizontal_error_nmi`` in
+        nmi, ``motor_starts_per_hour`` per hour, ...) without the ones that echo the
+        inputs, its warnings joined into one string, and ``top_error_source`` with
+        its contribution ``top_error_source_nmi`` (nmi).
+    """
     out = {
         k: v
         for k, v in metrics.items()
@@ -87,6 +115,18 @@ def run_point(payload: str) -> dict[str, Any]:
 
     Never raises: an error becomes a ``failed`` result carrying its message, so
     one bad point cannot sink the sweep.
+
+    Parameters
+    ----------
+    payload : str
+        JSON text from :meth:`inserr.sweep.Grid.payload`.
+
+    Returns
+    -------
+    dict
+        ``status`` (``ok`` or ``failed``), ``error`` (message, ``""`` if none),
+        ``metrics`` (:func:`headline_metrics`, when ok) and ``elapsed_s``, the
+        wall time of the point (s).
     """
     from inserr import summary
     from inserr.scenario import scenario_from_dict
@@ -108,17 +148,44 @@ def _task_key(pid: str) -> str:
 
 
 class LocalEngine:
-    """Dask's local schedulers: no server, ``workers`` processes or threads."""
+    """Dask's local schedulers: no server, ``workers`` processes or threads.
+
+    Parameters
+    ----------
+    scheduler : str
+        One of :data:`LOCAL_SCHEDULERS`: ``"processes"``, ``"threads"`` or ``"sync"``.
+    workers : int
+        Worker processes or threads (1 for ``sync``).
+    """
 
     def __init__(self, scheduler: str, workers: int):
         self.scheduler = scheduler
         self.workers = workers
 
     def describe(self) -> str:
+        """One line naming the engine, for the summary of a run.
+
+        Returns
+        -------
+        str
+            E.g. ``"dask processes scheduler, 2 worker(s)"``.
+        """
         return f"dask {self.scheduler} scheduler, {self.workers} worker(s)"
 
     def run(self, tasks: dict[str, str], on_result: OnResult) -> None:
-        """Run ``tasks`` (point id -> payload), reporting each result as it arrives."""
+        """Run ``tasks``, reporting each result as it arrives.
+
+        A worker process that dies fails the points it was running (reported as
+        ``failed``); the other points are run again on a new pool.
+
+        Parameters
+        ----------
+        tasks : dict of str to str
+            Point id -> payload (:meth:`inserr.sweep.Grid.payload`).
+        on_result : callable
+            Called in this thread as ``on_result(point_id, result)`` once per
+            point, with the dict of :func:`run_point`.
+        """
         from concurrent.futures.process import BrokenProcessPool
 
         remaining = dict(tasks)
@@ -160,7 +227,7 @@ class LocalEngine:
             dask.compute(*delayed, **kwargs)
 
     def close(self) -> None:
-        pass
+        """Release the engine (nothing to do: Dask's local pools end with each run)."""
 
 
 #: Environment variables that size the BLAS/OpenMP thread pools of a new process.
@@ -216,7 +283,19 @@ class _ResultSink(Callback):
 
 
 class ClusterEngine:
-    """An existing dask.distributed cluster (by address, or a connected Client)."""
+    """An existing dask.distributed cluster (by address, or a connected Client).
+
+    Parameters
+    ----------
+    scheduler : str or distributed.Client
+        The scheduler's address (``tcp://HOST:PORT``), connected to now (10 s
+        timeout) and closed by :meth:`close`, or a connected Client, left open.
+
+    Raises
+    ------
+    InputError
+        The cluster cannot be reached.
+    """
 
     def __init__(self, scheduler: Any):
         from distributed import Client
@@ -235,9 +314,30 @@ class ClusterEngine:
             self.client = scheduler
 
     def describe(self) -> str:
+        """One line naming the engine, for the summary of a run.
+
+        Returns
+        -------
+        str
+            E.g. ``"dask.distributed cluster at tcp://127.0.0.1:8786"``.
+        """
         return f"dask.distributed cluster at {self.client.scheduler.address}"
 
     def run(self, tasks: dict[str, str], on_result: OnResult) -> None:
+        """Submit ``tasks`` to the cluster, reporting each result as it arrives.
+
+        A point whose task fails on the cluster (e.g. ``KilledWorker`` after its
+        workers died) is reported as ``failed``; the others go on. On an
+        interrupt, the points not finished are cancelled on the cluster.
+
+        Parameters
+        ----------
+        tasks : dict of str to str
+            Point id -> payload (:meth:`inserr.sweep.Grid.payload`).
+        on_result : callable
+            Called in this thread as ``on_result(point_id, result)`` once per
+            point, with the dict of :func:`run_point`.
+        """
         from distributed import as_completed
 
         futures = {
@@ -257,6 +357,7 @@ class ClusterEngine:
             self.client.cancel([f for f in futures if not f.done()])
 
     def close(self) -> None:
+        """Close the connection if this engine opened it (a Client passed in stays open)."""
         if self._own:
             self.client.close()
 
@@ -272,6 +373,10 @@ def open_engine(scheduler: Any = None, workers: int | None = None) -> LocalEngin
         or an engine already opened (returned as is).
     workers : int, optional
         Local workers (default: the CPUs available). Not allowed with a cluster.
+
+    Returns
+    -------
+    LocalEngine or ClusterEngine
 
     Raises
     ------
@@ -308,8 +413,12 @@ class SweepOutcome:
     Attributes
     ----------
     out_dir : Path
+        The output directory.
     results_csv : Path
-    header, rows : the tidy table written to ``results.csv``
+        ``OUT/results.csv``.
+    header : list of str
+    rows : list of list
+        The tidy table written to ``results.csv`` (:func:`inserr.sweep_store.table`).
     computed : int
         Points analysed by this run.
     resumed : int
@@ -317,7 +426,9 @@ class SweepOutcome:
     counts : dict
         Number of points per status (ok, failed, invalid, pending).
     plots : list of Path
+        The figures written (empty with ``plots=False``).
     engine : str
+        What ran the points (:meth:`LocalEngine.describe`).
     """
 
     out_dir: Path
@@ -344,7 +455,31 @@ def run_sweep(
     Nothing is created before the engine is ready (an unreachable cluster is an
     :class:`InputError` with no directory left behind). ``results.csv`` is written
     even when the run is interrupted, with status ``pending`` for the points not
-    done yet.
+    done yet. Figures in ``out_dir`` always describe ``results.csv``: those of
+    earlier results are replaced or removed (also with ``plots=False`` and after
+    an interrupted run); files inserr did not write are left alone.
+
+    Parameters
+    ----------
+    grid : Grid
+        The validated grid (:func:`inserr.sweep.build_grid`).
+    out_dir : str or Path
+        Output directory; a directory of an earlier run is resumed.
+    scheduler : str or distributed.Client or engine, optional
+        See :func:`open_engine`.
+    workers : int, optional
+        Local workers (see :func:`open_engine`).
+    plots : bool
+        Draw the summary figures (:mod:`inserr.sweep_plots`).
+
+    Returns
+    -------
+    SweepOutcome
+
+    Raises
+    ------
+    InputError
+        Bad scheduler or worker count, unreachable cluster (before ``out_dir`` exists).
     """
     engine = open_engine(scheduler, workers)
     engine_text = engine.describe()
@@ -368,10 +503,14 @@ def run_sweep(
                 computed += 1
                 bar.update()
 
+            completed = False
             try:
                 engine.run(todo, on_result)
+                completed = True
             finally:
                 path, header, rows = write_results(store, grid)
+                if not completed:
+                    remove_stale_figures(store.root)  # they show earlier results
     finally:
         engine.close()
     figures: list[Path] = []
@@ -379,6 +518,8 @@ def run_sweep(
         from inserr.sweep_plots import write_figures
 
         figures = write_figures(grid, header, rows, store.root)
+    else:
+        remove_stale_figures(store.root)
     counts: dict[str, int] = {}
     for r in rows:
         status = r[header.index("status")]

@@ -30,14 +30,42 @@ GIMBALS = ("outer", "inner")
 
 
 def table_dcm(a, b, mounting: np.ndarray | None = None) -> np.ndarray:
-    """``C_s^b`` for outer angle ``a`` and inner angle ``b`` (rad; arrays broadcast)."""
+    """IMU-to-body DCM ``C_s^b = rot_z(a) @ rot_x(b) @ C_s^t`` of the table.
+
+    Parameters
+    ----------
+    a : float or array_like
+        Outer (azimuth) gimbal angle, rad, right hand about body z.
+    b : float or array_like
+        Inner gimbal angle, rad; broadcasts against ``a``.
+    mounting : (3, 3) array, optional
+        IMU mounting ``C_s^t`` on the inner gimbal (None = identity).
+
+    Returns
+    -------
+    ndarray, shape (3, 3) or (..., 3, 3)
+        ``C_s^b`` (IMU components to body right-front-up components).
+    """
     a, b = np.broadcast_arrays(np.asarray(a, float), np.asarray(b, float))
     c = rot_z(a) @ rot_x(b)
     return c if mounting is None else c @ mounting
 
 
 def gimbal_axis_b(gimbal: str, a: float) -> np.ndarray:
-    """Unit rotation axis of a gimbal, resolved in the body frame, at outer angle ``a``."""
+    """Unit rotation axis of a gimbal, resolved in the body frame.
+
+    Parameters
+    ----------
+    gimbal : {"outer", "inner"}
+        Which gimbal.
+    a : float
+        Outer gimbal angle, rad (only moves the inner axis).
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        Body z for the outer gimbal, ``rot_z(a) @ e_x`` for the inner one.
+    """
     if gimbal == "outer":
         return np.array([0.0, 0.0, 1.0])
     return np.array([math.cos(a), math.sin(a), 0.0])  # rot_z(a) @ e_x
@@ -61,6 +89,23 @@ def imu_heading_offset(
     For heading-only vehicle motion ``C_b^n(t) = rot_z(-H(t)) C_tilt``, so the IMU
     heading is ``H(t) + imu_heading_offset(C_tilt, a(t), b(t))``: only the gimbal
     angles need the 3-D geometry.
+
+    Parameters
+    ----------
+    c_tilt : (3, 3) array
+        ``C_b^n`` of the vehicle at heading 0 (:attr:`inserr.motion.Motion.tilt`).
+    a : float or array_like
+        Outer gimbal angle(s), rad.
+    b : float or array_like
+        Inner gimbal angle(s), rad; broadcasts against ``a``.
+    mounting : (3, 3) array, optional
+        IMU mounting ``C_s^t`` (None = identity).
+
+    Returns
+    -------
+    ndarray
+        Heading offset, rad, clockwise from north, in [-pi, pi] (not wrapped to
+        [0, 2 pi)); shape of ``a`` and ``b`` broadcast.
     """
     p, q, z = _yaxis_parts(b, mounting)
     a = np.asarray(a, dtype=float)[..., None]
@@ -75,6 +120,23 @@ def isolation_angle(c_bn: np.ndarray, b, mounting: np.ndarray | None, target) ->
     and north components are linear in ``(cos a, sin a)``, so the angle that points
     it at heading H solves ``E cos H - N sin H = 0`` in closed form (the root with
     positive projection on the target direction).
+
+    Parameters
+    ----------
+    c_bn : (..., 3, 3) array
+        Vehicle attitude ``C_b^n`` (body right-front-up to ENU).
+    b : float or array_like
+        Inner gimbal angle(s), rad.
+    mounting : (3, 3) array or None
+        IMU mounting ``C_s^t`` (None = identity).
+    target : float or array_like
+        Wanted IMU heading, rad, clockwise from north.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Outer gimbal angle, rad, in [-2 pi, 2 pi] (not unwrapped; callers pick the
+        branch).
     """
     p, q, z = _yaxis_parts(b, mounting)
     c_bn = np.asarray(c_bn, dtype=float)
@@ -117,6 +179,7 @@ class TableSchedule:
     a0, b0 : (K,) rad
         Outer and inner angles at the segment start.
     labels : (K,) str
+        Segment labels for plots and reports.
     target_heading : (K,) rad
         IMU heading at the start of an isolation segment (NaN otherwise).
     target_rate : (K,) rad/s
@@ -126,6 +189,8 @@ class TableSchedule:
         IMU mounting ``C_s^t`` on the inner gimbal.
     cycle : float or None
         Period of the open-loop cycle (s), None for closed-loop schedules.
+    meta : dict
+        Extra scheme information (e.g. ``isolation_reversals``); not compared.
     """
 
     t0: np.ndarray
@@ -156,6 +221,10 @@ class TableSchedule:
         Isolation segments count one start per reversal of the compensating rate
         (recorded by the scheme in ``meta["isolation_reversals"]``) plus one when
         entered from a stop.
+
+        Returns
+        -------
+        int
         """
         n = 0
         prev_kind, prev_sign = "stop", 0.0
@@ -169,7 +238,25 @@ class TableSchedule:
         return n + int(self.meta.get("isolation_reversals", 0))
 
     def angles_at(self, t: np.ndarray, motion=None) -> tuple[np.ndarray, np.ndarray]:
-        """Outer and inner angles (rad) at times ``t`` (s); isolation needs the ``motion``."""
+        """Outer and inner gimbal angles at given times.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, s, from the start of the schedule (angles hold after the end).
+        motion : Motion, optional
+            Vehicle motion; required if an isolation segment is sampled.
+
+        Returns
+        -------
+        a, b : ndarray, shape (len(t),)
+            Outer and inner angles, rad (continuous, not wrapped).
+
+        Raises
+        ------
+        ValueError
+            If an isolation segment is sampled without ``motion``.
+        """
         t = np.atleast_1d(np.asarray(t, dtype=float))
         k = np.clip(np.searchsorted(self.t0, t, side="right") - 1, 0, len(self.t0) - 1)
         tau = np.minimum(t - self.t0[k], self.duration[k])
@@ -196,17 +283,59 @@ class TableSchedule:
         return a, b
 
     def dcm_at(self, t: np.ndarray, motion=None) -> np.ndarray:
-        """``C_s^b`` at times ``t``; (len(t), 3, 3)."""
+        """IMU-to-body DCM ``C_s^b`` at given times (:func:`table_dcm`).
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, s.
+        motion : Motion, optional
+            Vehicle motion; required for isolation segments.
+
+        Returns
+        -------
+        ndarray, shape (len(t), 3, 3)
+        """
         a, b = self.angles_at(t, motion)
         return table_dcm(a, b, self.mounting)
 
     def imu_heading(self, t: np.ndarray, motion) -> np.ndarray:
-        """IMU heading (rad, [0, 2 pi)) at times ``t`` for a vehicle ``motion``."""
+        """Heading of the IMU y axis, ``heading_of(C_b^n C_s^b)``, at given times.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, s.
+        motion : Motion
+            Vehicle motion giving ``C_b^n(t)``.
+
+        Returns
+        -------
+        ndarray, shape (len(t),)
+            IMU heading, rad, clockwise from north, in [0, 2 pi).
+        """
         return heading_of(motion.attitude(t) @ self.dcm_at(t, motion))
 
 
 class ScheduleBuilder:
-    """Accumulates segments; used by every scheme so none writes its own bookkeeping."""
+    """Accumulates segments; used by every scheme so none writes its own bookkeeping.
+
+    Parameters
+    ----------
+    a0, b0 : float
+        Outer and inner gimbal angles at t = 0, rad.
+    mounting : (3, 3) array, optional
+        IMU mounting ``C_s^t`` on the inner gimbal (None = identity).
+
+    Attributes
+    ----------
+    t : float
+        End time of the segments added so far, s.
+    a, b : float
+        Current outer and inner angles, rad.
+    meta : dict
+        Copied into :attr:`TableSchedule.meta` by :meth:`build`.
+    """
 
     def __init__(self, a0: float = 0.0, b0: float = 0.0, mounting: np.ndarray | None = None):
         self.t = 0.0
@@ -217,7 +346,15 @@ class ScheduleBuilder:
         self.meta: dict = {}
 
     def stop(self, duration: float, label: str = "stop") -> None:
-        """Hold both gimbals for ``duration`` s (skipped if zero)."""
+        """Append a stop: hold both gimbals (skipped if ``duration`` is not positive).
+
+        Parameters
+        ----------
+        duration : float
+            Stop duration, s.
+        label : str
+            Segment label.
+        """
         if duration > 0:
             self._rows.append(
                 (self.t, duration, "stop", "", 0.0, self.a, self.b, label, math.nan, 0.0)
@@ -225,7 +362,19 @@ class ScheduleBuilder:
             self.t += duration
 
     def rotate(self, gimbal: str, angle: float, rate: float, label: str | None = None) -> None:
-        """Turn ``gimbal`` by ``angle`` (rad, signed) at ``|rate|`` (rad/s)."""
+        """Append a constant-rate turn of one gimbal (skipped if ``angle`` is zero).
+
+        Parameters
+        ----------
+        gimbal : {"outer", "inner"}
+            The gimbal that turns.
+        angle : float
+            Signed turn, rad, right hand about the gimbal axis.
+        rate : float
+            Gimbal rate, rad/s; only ``|rate|`` is used, the sign follows ``angle``.
+        label : str, optional
+            Segment label (default ``"rotate <gimbal> <angle> deg"``).
+        """
         if angle == 0:
             return
         rate = abs(rate) * math.copysign(1.0, angle)
@@ -250,7 +399,20 @@ class ScheduleBuilder:
         """Steer the IMU heading along ``target + target_rate * tau`` for ``duration`` s.
 
         The outer gimbal follows the vehicle yaw in closed form
-        (:func:`isolation_angle`); ``a_start``/``a_end`` are its angles at the ends.
+        (:func:`isolation_angle`); nothing is added if ``duration`` is not positive.
+
+        Parameters
+        ----------
+        duration : float
+            Segment duration, s.
+        target : float
+            IMU heading at the segment start, rad, clockwise from north.
+        a_start, a_end : float
+            Outer gimbal angle at the start and at the end of the segment, rad.
+        target_rate : float
+            Rate of the IMU heading during the segment, rad/s (0 = held fixed).
+        label : str
+            Segment label.
         """
         if duration > 0:
             self._rows.append(
@@ -271,7 +433,22 @@ class ScheduleBuilder:
             self.a = a_end
 
     def build(self, cycle: float | None = None) -> TableSchedule:
-        """The finished :class:`TableSchedule`."""
+        """The finished :class:`TableSchedule`.
+
+        Parameters
+        ----------
+        cycle : float, optional
+            Period of the open-loop cycle, s (None for closed-loop schedules).
+
+        Returns
+        -------
+        TableSchedule
+
+        Raises
+        ------
+        ValueError
+            If no segment was added.
+        """
         if not self._rows:
             raise ValueError("empty schedule")
         cols = list(zip(*self._rows, strict=True))

@@ -99,6 +99,10 @@ _QUANTITY = re.compile(
 )
 
 
+def _article(word: str) -> str:
+    return "an" if word[:1] in "aeiou" else "a"
+
+
 def units_for(kind: str) -> list[str]:
     """Names of the units accepted for a physical kind (for error messages)."""
     return [u for u in UNITS[kind] if u]
@@ -172,7 +176,7 @@ def parse_quantity(
     if unit not in table:
         raise InputError(
             field,
-            f"unknown unit {unit!r} for a {kind.replace('_', ' ')}",
+            f"unknown unit {unit!r} for {_article(kind)} {kind.replace('_', ' ')}",
             f"use one of: {', '.join(units_for(kind))}",
         )
     if not all(math.isfinite(v) for v in values):
@@ -185,7 +189,8 @@ def parse_quantity(
     if len(values) == 1:
         values = values * size
     if len(values) != size:
+        example = "x or x,y,z" if size == 3 else "one value or xy,xz,yx,yz,zx,zy"
         raise InputError(
-            field, f"expected 1 or {size} values, got {len(values)}", "give x or x,y,z"
+            field, f"expected 1 or {size} values, got {len(values)}", f"give {example}"
         )
     return np.array(values) * factor

@@ -245,7 +245,9 @@ def test_input_errors():
         Prior(attitude=np.array([-1.0, 0.0, 0.0]))
     with pytest.raises(InputError):
         run_alignment(
-            SITE, Timeline.static(np.eye(3), 10.0), ImuErrors(gyro_scale_factor=np.full(3, 1e-5))
+            SITE,
+            Timeline.static(np.eye(3), 10.0),
+            ImuErrors(gyro_bias_instability=1e-8),  # the filter has no Gauss-Markov states
         )
 
 
@@ -279,6 +281,35 @@ def test_cli_align_static_reproduces_the_floors(capsys):
     assert out["convergence_time_s"]["accel_bias_x_ug"] is None  # not estimated
 
 
+@pytest.mark.parametrize("prior", [None, ("3600", "600")])
+def test_cli_align_floors_account_for_the_attitude_prior(prior, capsys):
+    """At 100 micro-g / 0.01 deg/h the default 60 arcsec / 60 arcmin attitude prior is
+    real information (tilt 19.5 against nabla/g = 20.6 arcsec): the reported floor must
+    combine it (1/s^2 = 1/s0^2 + 1/floor^2), and a diffuse prior must give the textbook
+    floor. 2 % covers the Omega sin L coupling and the 20-min convergence (< 0.6 % seen).
+    """
+    argv = ["align", "--scheme", "none", "--lat", "34", "--minutes", "20",
+            "--gyro-bias", "0.01", "--accel-bias", "100", "--json"]  # fmt: skip
+    if prior:
+        argv += ["--initial-tilt", prior[0], "--initial-heading", prior[1]]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    s0_tilt, s0_head = (60.0, 60.0) if prior is None else (3600.0, 600.0)
+    tilt = 100 * MICRO_G / earth.gravity(LAT) / ARCSEC
+    heading = 0.01 * DEG_PER_HOUR / (earth.OMEGA_IE * math.cos(LAT)) / ARCMIN
+    assert out["static_floor_diffuse_prior"]["phi_n_arcsec"] == pytest.approx(tilt, rel=1e-9)
+    assert out["static_floor_diffuse_prior"]["phi_u_arcmin"] == pytest.approx(heading, rel=1e-9)
+    want_tilt = (tilt**-2 + s0_tilt**-2) ** -0.5
+    want_head = (heading**-2 + s0_head**-2) ** -0.5
+    assert out["static_floor"]["phi_n_arcsec"] == pytest.approx(want_tilt, rel=1e-9)
+    fs = out["final_sigma"]
+    for key in ("phi_e_arcsec", "phi_n_arcsec"):
+        assert fs[key] == pytest.approx(want_tilt, rel=0.02)
+    assert fs["phi_u_arcmin"] == pytest.approx(want_head, rel=0.02)
+    if prior is None:  # the prior matters here: the textbook floor alone is > 4 % off
+        assert abs(fs["phi_n_arcsec"] / tilt - 1) > 0.04
+
+
 def test_cli_align_report(tmp_path, capsys):
     out_dir = tmp_path / "rep"
     argv = ["align", "--scheme", "none,two-position", "--minutes", "3", "--stop", "30",
@@ -303,3 +334,50 @@ def test_cli_align_report(tmp_path, capsys):
 def test_cli_align_bad_input_exits_2(argv, capsys):
     assert main(argv) == 2
     assert "error" in capsys.readouterr().err
+
+
+def test_unmodelled_misalignment_and_scale_factor_kick_the_true_attitude_on_a_turn():
+    """The simulated run carries K = S + M the filter does not model.
+
+    On a 180 deg table turn about up, the x gyro's z misalignment m adds m * w_z about
+    the rotating IMU x axis: integral of m (cos t, sin t) dt over [0, pi] = (0, 2m), a
+    pure north tilt of 2m. The z scale factor adds s * pi of heading. Both closed forms
+    hold to < 1 % (the 30 s turn is short against Schuler; Earth-rate terms are
+    second order). The filter's sigmas do not depend on K at all.
+    """
+    site = Site(34.0 * DEG)
+    tl = alignment_timeline(Base(site, Motion(), 6.0 * DEG, 60.0), "two-position", 120.0)
+    m, sf = 10.0 * ARCSEC, 1e-5
+    mis = np.zeros(6)
+    mis[1] = m  # xz: x gyro senses z rate
+    imu = ImuErrors(gyro_misalignment=mis, gyro_scale_factor=np.array([0.0, 0.0, sf]))
+    res = run_alignment(site, tl, imu, truth0=np.zeros(15))
+    before, after = np.searchsorted(res.t, [59.0, 95.0])
+    assert np.all(np.abs(res.truth[before, :3]) < 0.01 * m)
+    phi = res.truth[after, :3]
+    assert abs(phi[I["phi_n"]]) == pytest.approx(2 * m, rel=0.01)
+    assert abs(phi[I["phi_e"]]) < 0.01 * m
+    assert abs(phi[I["phi_u"]]) == pytest.approx(math.pi * sf, rel=0.01)
+    plain = run_alignment(site, tl, ImuErrors(), truth0=np.zeros(15))
+    np.testing.assert_allclose(res.sigma, plain.sigma, rtol=1e-12, atol=0)
+    # Superposition: with noise, the run with K differs from the run without by
+    # exactly K's noise-free response (same seed, same noise realization).
+    noisy = dict(arw=1e-3 * DEG_PER_SQRT_HOUR, vrw=20 * MICRO_G_PER_SQRT_HZ)
+    with_k = run_alignment(site, tl, ImuErrors(**noisy, gyro_misalignment=mis), truth0=np.zeros(15))
+    without = run_alignment(site, tl, ImuErrors(**noisy), truth0=np.zeros(15))
+    k_only = run_alignment(site, tl, ImuErrors(gyro_misalignment=mis), truth0=np.zeros(15))
+    np.testing.assert_allclose(with_k.truth - without.truth, k_only.truth, atol=1e-12)
+
+
+def test_cli_align_truth_only_errors_move_the_run_not_the_sigmas(capsys):
+    base = ["align", "--scheme", "two-position", "--minutes", "2", "--stop", "30", "--json"]
+    assert main(base) == 0
+    plain = json.loads(capsys.readouterr().out)
+    assert main(base + ["--gyro-misalignment", "10", "--gyro-sf", "10"]) == 0
+    with_k = json.loads(capsys.readouterr().out)
+    assert with_k["final_sigma"] == plain["final_sigma"]
+    # one 180 deg turn: about 2 x 10 arcsec of tilt kick the filter does not model
+    kick = abs(with_k["final_error"]["phi_n_arcsec"] - plain["final_error"]["phi_n_arcsec"])
+    assert kick > 5.0
+    assert main(base + ["--gyro-misalignment", "1,2,3"]) == 2
+    assert "--gyro-misalignment" in capsys.readouterr().err

@@ -86,3 +86,20 @@ def test_verdict_follows_the_numbers(run_module):
     v["equal_dwell"] = worse
     text = run_module.verdict_text(v, sc, "four", "six")[-1]
     assert "does not hold" in text and "3 of 12" in text
+
+
+def test_sensitivity_sentence_follows_the_numbers(run_module):
+    from inserr.calibration_report import positioning_sensitivity_summary
+    from inserr.earth import Site
+    from inserr.mechanism import six_position
+
+    block = positioning_sensitivity_summary(six_position(), Site(math.radians(34.0)), "gyro")
+    text = run_module.sensitivity_sentence("six", block, 3.0)
+    # The classical set's x gyro only sees the vertical Earth rate: an east tilt at the
+    # x-up/x-down stops (p4, p5) feeds the north rate straight into sf_x.
+    assert "sf_x among the scale factors" in text and "about east at p4 and p5" in text
+    assert "all 3 biases equally" in text
+    block["sf_y"]["largest"]["abs_ppm_per_arcsec"] = 10.0  # make sf_y the largest
+    assert "sf_y among the scale factors (10 ppm/arcsec" in run_module.sensitivity_sentence(
+        "six", block, 3.0
+    )

@@ -137,7 +137,8 @@ def test_bad_flags_give_one_clear_error(argv, field, capsys, tmp_path):
         ('[sight]\nlatitude = "34 deg"\n', "sight"),
         ('[imu\ngyro_bias = "0.02 deg/h"\n', "malformed TOML"),
         ('[scheme]\nname = "spin"\n', "--scheme"),
-        ('[site]\nlatitude = "90 deg"\n', "latitude"),
+        ('[site]\nlatitude = "90 deg"\n', "site.latitude"),
+        ('[compare]\nschemes = ["none", "spin"]\n', "compare.schemes"),
         ('[scenario]\nduration = "-1 h"\n', "scenario.duration"),
         ('[motion]\ntype = "heave"\n', "motion.type"),
     ],
@@ -176,3 +177,91 @@ def test_same_inputs_same_numbers(capsys):
     a = _json(capsys, argv)
     b = _json(capsys, argv)
     assert a == b
+
+
+def test_out_never_replaces_a_directory_inserr_did_not_write(tmp_path, capsys, monkeypatch):
+    # A report directory is replaced as a whole; a user's directory must survive.
+    precious = tmp_path / "precious"
+    precious.mkdir()
+    (precious / "notes.txt").write_text("keep me")
+    argv = ["drift", "--hours", "1", "--gyro-bias", "0.01"]
+    assert main(argv + ["--out", str(precious)]) == 2
+    err = capsys.readouterr().err
+    assert "--out" in err and "not an inserr report" in err
+    assert [p.name for p in precious.iterdir()] == ["notes.txt"]
+    monkeypatch.chdir(precious)
+    for target in (".", str(tmp_path)):  # the working directory and a parent of it
+        assert main(argv + ["--out", target]) == 2
+        assert "working directory" in capsys.readouterr().err
+    assert main(argv + ["--out", "notes.txt/sub"]) == 2
+    assert "is a file" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["precious"]
+    assert (precious / "notes.txt").read_text() == "keep me"
+
+
+def test_out_replaces_an_earlier_report(tmp_path, capsys):
+    out = tmp_path / "rep"
+
+    def argv(bias):
+        return ["drift", "--hours", "1", "--gyro-bias", bias, "--json", "--out", str(out)]
+
+    assert main(argv("0.01")) == 0
+    first = json.loads(capsys.readouterr().out)
+    assert main(argv("0.02")) == 0
+    capsys.readouterr()
+    again = json.loads((out / "results.json").read_text())
+    assert again["runs"][0]["max_horizontal_error_nmi"] > first["max_horizontal_error_nmi"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rep"]
+
+
+def test_non_utf8_scenario_and_oversized_run_are_input_errors(tmp_path, capsys):
+    scen = tmp_path / "binary.toml"
+    scen.write_bytes(b"\xff\xfe[site]\n")
+    assert main(["run", str(scen), "--out", str(tmp_path / "r")]) == 2
+    assert "UTF-8" in capsys.readouterr().err
+    # 100000 h at 1 s would need ~130 GB; refused before any work, naming the fix.
+    assert main(["drift", "--hours", "100000"]) == 2
+    err = capsys.readouterr().err
+    assert "output.step" in err and "--step" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["binary.toml"]
+
+
+def test_interrupt_is_one_line_and_status_130(monkeypatch, capsys):
+    import inserr.cli.modes as modes
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(modes, "run", interrupted)
+    assert main(["modes", "--lat", "34"]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "interrupted" in err[0]
+
+
+def test_flag_errors_name_the_flag_typed(capsys):
+    assert main(["drift", "--hours", "1", "--arw", "-1"]) == 2
+    assert capsys.readouterr().err.startswith("inserr drift: error: --arw (imu.arw):")
+    assert main(["drift", "--hours", "1", "--gyro-misalignment", "1,2"]) == 2
+    assert "xy,xz,yx,yz,zx,zy" in capsys.readouterr().err
+
+
+def test_every_run_in_a_report_gets_its_noise_envelope():
+    # The README's main job compares several schemes: each panel must carry its own
+    # 1-sigma noise envelope, RMS and worst-case curves, not just the first run.
+    from inserr import plots
+    from inserr.scenario import scenario_from_dict
+    from inserr.summary import run_scheme
+
+    scen = scenario_from_dict(
+        {
+            "scenario": {"duration": "2 h"},
+            "imu": {"gyro_bias": "0.01 deg/h", "arw": "0.002 deg/sqrt(h)"},
+            "output": {"covariance_step": "600 s"},
+        }
+    )
+    runs = {n: run_scheme(scen, n).result for n in ("none", "two-position", "four-position")}
+    fig = plots.horizontal_error(runs)
+    panels = [ax for ax in fig.axes if ax.get_visible()]
+    assert [ax.get_title() for ax in panels] == list(runs)
+    for ax in panels:
+        assert len(ax.lines) == 3 and len(ax.collections) == 1

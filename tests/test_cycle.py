@@ -10,8 +10,9 @@ from hypothesis import strategies as st
 from inserr.cycle import cycle_integrals
 from inserr.imu import MISALIGNMENT_INDEX, MISALIGNMENTS
 from inserr.motion import Motion
+from inserr.rotations import rot_axis
 from inserr.schedule import build_timeline
-from inserr.schemes import Step, TableScheme, build_scheme
+from inserr.schemes import PSINS_SIXTEEN, Step, TableScheme, build_scheme
 from inserr.units import DEG
 
 RATE = 6 * DEG
@@ -21,6 +22,7 @@ PERIODIC = [
     "four-position-modified",
     "eight-position",
     "sixteen-position",
+    "sixteen-position-inserr",
 ]
 
 
@@ -80,7 +82,13 @@ def test_issue_figures_for_four_position_and_cancelling_schemes():
     expected = 2 * math.sqrt(2) / RATE  # 27.009 s: the four turns' residual
     assert np.allclose(four.horizontal, np.diag([expected, expected]), atol=1e-9)
     assert expected == pytest.approx(27.009, abs=1e-3)
-    for name in ("two-position", "four-position-modified", "eight-position", "sixteen-position"):
+    for name in (
+        "two-position",
+        "four-position-modified",
+        "eight-position",
+        "sixteen-position",
+        "sixteen-position-inserr",
+    ):
         assert np.abs(cycle_integrals(build_scheme(name, RATE, 300.0)).horizontal).max() < 1e-9
 
 
@@ -94,12 +102,65 @@ def test_reversal_cancels_scale_factor_times_rate():
 
 def test_dual_axis_schemes_cancel_all_three_axes():
     eight = cycle_integrals(build_scheme("eight-position", RATE, 300.0))
-    sixteen = cycle_integrals(build_scheme("sixteen-position", RATE, 300.0))
     assert np.abs(eight.full).max() < 1e-9  # the up row and column too
     assert np.abs(eight.scale_factor).max() < 1e-12
     assert np.abs(eight.misalignment).max() > 1.0  # eight positions leave misalignment x rate
-    assert np.abs(sixteen.full).max() < 1e-9
-    assert np.abs(sixteen.misalignment).max() < 1e-12
+    for name in ("sixteen-position", "sixteen-position-inserr"):
+        sixteen = cycle_integrals(build_scheme(name, RATE, 300.0))
+        assert np.abs(sixteen.full).max() < 1e-9, name
+        assert np.abs(sixteen.scale_factor).max() < 1e-12, name
+        assert np.abs(sixteen.misalignment).max() < 1e-12, name
+
+
+def test_sixteen_position_is_the_psins_table_and_cancels():
+    # PSINS demos/test_RSINS_2_axis.m turns the IMU about its OWN axes, one row at a time
+    # (attrottt: C <- C rv2m(U angle)). Rebuild that attitude sequence directly and check
+    # that inserr's gimbal translation visits exactly the same sixteen orientations.
+    scheme = build_scheme("sixteen-position", RATE, 300.0)
+    assert len(scheme.steps) == 16 and scheme.cycle_time == pytest.approx(16 * (300.0 + 30.0))
+    axes = {"x": np.array([1.0, 0.0, 0.0]), "z": np.array([0.0, 0.0, 1.0])}
+    table = scheme.plan(Motion(), scheme.first_dwell + scheme.cycle_time)
+    stops = [k for k, kind in enumerate(table.kind) if kind == "stop"]
+    assert len(stops) == 17  # the opening stop and one after each row
+    c = np.eye(3)
+    for (axis, sign), k in zip(PSINS_SIXTEEN, stops[1:], strict=True):
+        c = c @ rot_axis(axes[axis], sign * math.pi)
+        t = np.array([table.t0[k] + 1.0])
+        assert np.allclose(table.dcm_at(t)[0], c, atol=1e-12)
+    assert np.allclose(c, np.eye(3), atol=1e-12)  # the table closes on its start
+    # Its cancellation properties, closed form (the numerical integral agrees, see
+    # test_closed_form_equals_numerical_integral): bias, scale factor x rate and
+    # misalignment x rate all vanish over the cycle, rotation phases included.
+    ci = cycle_integrals(scheme)
+    assert np.abs(ci.full).max() < 1e-9
+    assert np.abs(ci.stops).max() < 1e-9 and np.abs(ci.turns).max() < 1e-9
+    assert np.abs(ci.scale_factor).max() < 1e-12 and np.abs(ci.misalignment).max() < 1e-12
+    assert ci.motor_starts == 16
+    # The same holds on a tilted, turned static vehicle (the integral is C_b^n times it).
+    tilted = cycle_integrals(scheme, Motion(heading=0.7, pitch=0.05, roll=-0.1))
+    assert np.abs(tilted.full).max() < 1e-9
+
+
+def test_psins_and_inserr_sixteen_position_trade_offs():
+    # The figures quoted in docs/schemes.md (300 s stops, 6 deg/s).
+    psins = build_scheme("sixteen-position", RATE, 300.0)
+    mine = build_scheme("sixteen-position-inserr", RATE, 300.0)
+    cp, cm = cycle_integrals(psins), cycle_integrals(mine)
+    # Cycle means of the rate terms: PSINS's table is better.
+    assert np.abs(cp.mean_excursion_scale_factor).max() < 1e-12
+    assert cm.mean_excursion_scale_factor[2, 2] == pytest.approx(math.pi, rel=1e-9)
+    assert np.abs(cp.mean_excursion_misalignment).max() == pytest.approx(2.5, rel=1e-9)
+    assert np.abs(cm.mean_excursion_misalignment).max() == pytest.approx(4.5, rel=1e-9)
+    # Gimbal travel: inserr's keeps each gimbal within one revolution.
+
+    def travel(scheme, gimbal):
+        x = np.cumsum([0.0] + [s.angle for s in scheme.steps if s.gimbal == gimbal])
+        return (x.max() - x.min()) / DEG
+
+    assert travel(psins, "inner") == pytest.approx(720.0)
+    assert travel(psins, "outer") == pytest.approx(360.0)
+    assert travel(mine, "inner") == pytest.approx(360.0)
+    assert travel(mine, "outer") == pytest.approx(360.0)
 
 
 _turn = st.floats(min_value=-170.0, max_value=170.0).filter(lambda a: abs(a) > 1.0)
@@ -154,6 +215,92 @@ def test_breaking_the_symmetry_leaves_exactly_the_extra_stop(turns, dwells, star
     assert np.linalg.norm(c.horizontal) > extra
 
 
+# A random asymmetric schedule need not fail to cancel (three equal stops 120 deg apart
+# cancel as stops), so "asymmetric" alone cannot be asserted. Two constructions that
+# provably cannot cancel, whatever the random angles, dwells and gimbals:
+#
+# * Dominant stop. The IMU x axis is the inner gimbal's axis, so its horizontal
+#   projection is (cos a, sin a) whatever the inner angle: column x of the horizontal
+#   block is Z = int e^{i a(t)} dt over the cycle, with |e^{i a}| = 1. A stop of length
+#   D at one angle contributes D, everything else at most T - D, so |Z| >= 2 D - T.
+#   Making one stop exceed the rest of the cycle by ``extra`` gives |Z| >= extra > 0.
+# * Half-plane. If the outer angle never leaves (c - th, c + th), th < 90 deg (a turn
+#   between two such angles stays between them), Re(e^{-i c} Z) = int cos(a - c) dt
+#   >= T cos th > 0.
+_any_turn = st.floats(min_value=-360.0, max_value=360.0).filter(lambda a: abs(a) > 1.0)
+_row = st.tuples(st.sampled_from(["outer", "inner"]), _any_turn, _dwell)
+
+
+def _closed(rows, close_dwell):
+    """Steps of the random rows, then a turn of each gimbal back to its start."""
+    steps = [Step(g, a * DEG, d) for g, a, d in rows]
+    for gimbal in ("outer", "inner"):
+        net = sum(s.angle for s in steps if s.gimbal == gimbal)
+        if abs(net) > 1e-6:
+            steps.append(Step(gimbal, -net, close_dwell))
+    return steps
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    rows=st.lists(_row, min_size=1, max_size=8),
+    close_dwell=_dwell,
+    start=st.tuples(st.floats(-math.pi, math.pi), st.floats(-math.pi, math.pi)),
+    pick=st.integers(min_value=0, max_value=9),
+    extra=st.floats(min_value=1.0, max_value=1000.0),
+)
+def test_random_schedule_with_a_dominant_stop_does_not_cancel(
+    rows, close_dwell, start, pick, extra
+):
+    steps = _closed(rows, close_dwell)
+    k = pick % len(steps)
+    rest = TableScheme("r", tuple(steps), RATE, 10.0).cycle_time - steps[k].dwell
+    steps[k] = Step(steps[k].gimbal, steps[k].angle, rest + extra)
+    scheme = TableScheme("asym", tuple(steps), RATE, 10.0, start=start)
+    c = cycle_integrals(scheme)
+    assert np.linalg.norm(c.horizontal[:, 0]) >= extra * (1 - 1e-9) - 1e-9 * c.cycle_time
+
+
+_cone_row = st.tuples(
+    st.booleans(),  # True: an inner-gimbal turn; False: an outer turn to a new position
+    st.floats(min_value=-80.0, max_value=80.0),  # outer position, deg from the centre
+    _any_turn,  # inner turn, deg
+    _dwell,
+)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    rows=st.lists(_cone_row, min_size=1, max_size=8),
+    p0=st.floats(min_value=-80.0, max_value=80.0),
+    centre=st.floats(min_value=-math.pi, max_value=math.pi),
+    close_dwell=_dwell,
+)
+def test_random_schedule_within_a_half_plane_does_not_cancel(rows, p0, centre, close_dwell):
+    steps, pos, visited = [], p0, [p0]
+    for inner, target, turn, dwell in rows:
+        if inner:
+            steps.append(Step("inner", turn * DEG, dwell))
+        elif abs(target - pos) > 1.0:
+            steps.append(Step("outer", (target - pos) * DEG, dwell))
+            pos = target
+            visited.append(pos)
+    if abs(pos - p0) > 1e-9:
+        steps.append(Step("outer", (p0 - pos) * DEG, close_dwell))
+    net_inner = sum(s.angle for s in steps if s.gimbal == "inner")
+    if abs(net_inner) > 1e-6:
+        steps.append(Step("inner", -net_inner, close_dwell))
+    if not steps:  # nothing moved: a small out-and-back towards the centre
+        d = -10.0 if p0 > 0 else 10.0
+        steps = [Step("outer", d * DEG, close_dwell), Step("outer", -d * DEG, close_dwell)]
+        visited.append(p0 + d)
+    scheme = TableScheme("cone", tuple(steps), RATE, 10.0, start=(centre + p0 * DEG, 0.0))
+    c = cycle_integrals(scheme)
+    bound = c.cycle_time * math.cos(max(abs(v) for v in visited) * DEG)
+    z = c.horizontal[0, 0] + 1j * c.horizontal[1, 0]
+    assert (z * np.exp(-1j * centre)).real >= bound * (1 - 1e-9) > 0
+
+
 @pytest.mark.parametrize(
     "name", ["two-position", "four-position", "eight-position", "sixteen-position"]
 )
@@ -179,3 +326,94 @@ def test_mean_excursion_closed_form_equals_numerical(name):
     # Rate terms jump at turn starts/stops: first-order trapezoid error ~ dt * (turn
     # integral) per jump, a few 1e-3 rad at most.
     assert np.allclose(c.mean_excursion_scale_factor, sf_mean, atol=5e-3)
+
+
+CUSTOM_TOML = """
+[scenario]
+name = "three positions"
+
+[motion]
+heading = "{heading} deg"
+
+[scheme]
+name = "custom"
+rate = "6 deg/s"
+stop = "60 s"
+
+[[scheme.steps]]
+gimbal = "outer"
+angle = "120 deg"
+dwell = "60 s"
+label = "B"
+
+[[scheme.steps]]
+gimbal = "outer"
+angle = "120 deg"
+dwell = "60 s"
+label = "C"
+
+[[scheme.steps]]
+gimbal = "outer"
+angle = "-240 deg"
+dwell = "60 s"
+label = "A"
+"""
+
+
+def test_cycle_cli_reads_a_custom_scheme_from_a_scenario_file(tmp_path, capsys):
+    import json
+
+    from inserr.cli.main import main
+
+    path = tmp_path / "custom.toml"
+    path.write_text(CUSTOM_TOML.format(heading=0), encoding="utf-8")
+    assert main(["cycle", str(path), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    steps = (
+        Step("outer", 120 * DEG, 60.0, label="B"),
+        Step("outer", 120 * DEG, 60.0, label="C"),
+        Step("outer", -240 * DEG, 60.0, label="A"),
+    )
+    expected = cycle_integrals(TableScheme("custom", steps, RATE, 60.0))
+    assert d["scheme"] == "custom"
+    assert d["cycle_time_s"] == pytest.approx(3 * 60.0 + 480.0 / 6.0)
+    assert np.allclose(d["horizontal_cycle_integral_s"], expected.horizontal, atol=1e-9)
+    assert np.allclose(d["scale_factor_rate_integral_rad"], expected.scale_factor, atol=1e-12)
+    # The three stops cancel; the turns (120, 120, -240 deg) do not.
+    assert np.abs(expected.stops[:2, :2]).max() < 1e-9
+    assert np.abs(expected.horizontal).max() > 1.0
+    # Flags override the file's [scheme] keys; the vehicle heading rotates the rows E, N.
+    path.write_text(CUSTOM_TOML.format(heading=90), encoding="utf-8")
+    assert main(["cycle", str(path), "--stop", "100", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["cycle_time_s"] == pytest.approx(3 * 60.0 + 480.0 / 6.0)  # dwells are the table's
+    turned = cycle_integrals(
+        TableScheme("custom", steps, RATE, 100.0), Motion(heading=90 * DEG)
+    ).horizontal
+    assert np.allclose(d["horizontal_cycle_integral_s"], turned, atol=1e-9)
+    assert "heading 90 deg" in d["static_base"]
+    # --scheme replaces the file's scheme (its steps are then ignored, its 60 s stop kept).
+    assert main(["cycle", str(path), "--scheme", "four-position", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["scheme"] == "four-position" and d["cycle_time_s"] == pytest.approx(4 * 60.0 + 90.0)
+
+
+def test_cycle_cli_bad_inputs_give_one_clear_error(tmp_path, capsys):
+    from inserr.cli.main import main
+
+    path = tmp_path / "swing.toml"
+    path.write_text(
+        '[scheme]\nname = "flexible-two-position"\n'
+        '[motion]\ntype = "yaw-swing"\namplitude = "6 deg/s"\nperiod = "120 s"\n',
+        encoding="utf-8",
+    )
+    for argv, field in (
+        (["cycle"], "--scheme"),
+        (["cycle", "--json"], "--scheme"),
+        (["cycle", str(path)], "--scheme"),  # closed loop: no fixed cycle
+        (["cycle", str(tmp_path / "missing.toml")], "missing.toml"),
+        (["cycle", str(path), "--scheme", "custom"], "scheme.steps"),
+    ):
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and field in err[0] and "error" in err[0], (argv, err)

@@ -71,6 +71,14 @@ def test_control_discretization_equals_expm_of_augmented_matrix():
     batch = d.transitions(np.array([w, -w]), np.array([7.3, 2.0]))
     assert np.allclose(batch[0], ref, atol=tol)
     assert np.allclose(batch[1], sl.expm(model.matrix(-w) * 2.0), atol=tol)
+    # Short pieces of a stop (w = 0) take the same structured path: still expm.
+    zero = np.zeros(3)
+    for h in (0.37, 59.9):
+        assert d._use_structured(d.key(zero, h))
+        ref = sl.expm(model.matrix(zero) * h)
+        tol_h = 1e-14 * np.abs(ref).max()  # entries reach ~3e5 (dr per bias) at 60 s
+        assert np.allclose(d.transitions(zero[None], np.array([h]))[0], ref, rtol=0, atol=tol_h)
+    assert not d._use_structured(d.key(zero, 300.0))  # a whole stop: python-control
 
 
 def test_van_loan_noise_equals_quadrature():

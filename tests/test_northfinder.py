@@ -33,8 +33,20 @@ from inserr.northfinder import (
     true_coefficients,
 )
 from inserr.northfinder_bounds import crlb
-from inserr.northfinder_filter import period_measurements, run_filter, solve, wrap_angle
-from inserr.northfinder_study import monte_carlo
+from inserr.northfinder_filter import (
+    measurement_rows,
+    period_measurements,
+    run_filter,
+    solve,
+    wrap_angle,
+)
+from inserr.northfinder_study import (
+    EQUATORIAL_BAND,
+    POLAR_BAND,
+    diagnose,
+    monte_carlo,
+    table_elevation,
+)
 from inserr.units import DEG, DEG_PER_S, MIL
 
 OMEGA = earth.OMEGA_IE
@@ -343,15 +355,117 @@ def test_convergence_time_definition():
     assert dataclasses.replace(res, heading_error=err).convergence_time() is None
 
 
-def test_filter_columns_are_independent_runs():
-    """One filter with many state columns equals single-run filters (filterpy shapes)."""
+def test_filter_runs_are_independent_filters():
+    """Each run has its own filter: a run's states do not depend on the other runs."""
     pose = Pose.from_degrees(-20, 250, 2, 1)
     ins = Instrument(sample_rate=10.0)
     z = period_measurements(simulate(pose, ins, GRADE, 60.0, n_runs=3, seed=2), ins)
     many = run_filter(z, ins, GRADE).x[-1]
     one = run_filter(z[:, :, 1:2], ins, GRADE).x[-1, :, 0]
-    np.testing.assert_allclose(many[:, 1], one, rtol=1e-12, atol=0)
+    np.testing.assert_array_equal(many[:, 1], one)
     assert not np.allclose(many[:, 0], many[:, 1])
+
+
+def test_filter_equals_weighted_least_squares():
+    """With constant states (no bias instability, Q = 0) and a diffuse prior, the Kalman
+    filter is the weighted least-squares fit of all period measurements.
+
+    Independent truth: numpy's lstsq on the stacked rows, gyro and accelerometer rows
+    scaled by 1/ARW and 1/VRW. The prior's pull is ~(sigma_x / prior)^2 < 1e-10, but the
+    first updates, with prior variances ~1e14 times the measurement variances, leave
+    round-off of a few 1e-4 of each state's sigma; 2e-3 sigma leaves margin. A filter
+    fed a mis-shaped z (filterpy's (dim_z, 1) contract broken) would be off by the
+    signal itself, thousands of sigmas.
+    """
+    grade = GRADE.replace(gyro_bias_instability=0.0)
+    ins = Instrument(sample_rate=10.0)
+    pose = Pose.from_degrees(48, 140, -1.5, 2)
+    z = period_measurements(simulate(pose, ins, grade, 120.0, n_runs=2, seed=4), ins)
+    out = run_filter(z, ins, grade)
+    h = measurement_rows(ins, z.shape[0])
+    w = np.array([1.0 / grade.gyro_arw, 1.0 / grade.accel_vrw])
+    a = (h * w[None, :, None]).reshape(-1, 6)
+    for run in range(2):
+        b = (z[:, :, run] * w[None, :]).reshape(-1)
+        x_ls = np.linalg.lstsq(a, b, rcond=None)[0]
+        sigma = np.sqrt(np.diag(out.P[-1]))
+        assert np.all(np.abs(out.x[-1, :, run] - x_ls) < 2e-3 * sigma)
+
+
+# --- hemisphere declaration and warnings ------------------------------------------------
+
+
+def test_hemisphere_is_declared_not_taken_from_the_truth():
+    """Default declaration is north whatever the simulated latitude; a southern site
+    declared north gets the mirror solution (and a warning), declared south the truth."""
+    pose = Pose.from_degrees(-34, 30, 1, -2)
+    ins = Instrument(sample_rate=10.0)
+    default = monte_carlo(pose, ins, GRADE, 180.0, n_runs=20, seed=3)
+    assert default.hemisphere == 1
+    mirror_h, _ = mirror_pose(pose)
+    offset = wrap_angle(mirror_h - pose.heading)
+    assert abs(offset) > 2 * DEG  # the two roots are far apart here
+    # 20 runs of 0.5 mil sigma: the mean is within ~0.1 mil of the mirror's offset.
+    assert default.heading_bias()[-1] == pytest.approx(offset, abs=0.5 * MIL)
+    assert any(w.startswith("hemisphere:") for w in default.warnings)
+    south = monte_carlo(pose, ins, GRADE, 180.0, n_runs=20, seed=3, hemisphere="south")
+    assert south.summary()["hemisphere_declared"] == "south"
+    assert abs(south.heading_bias()[-1]) < 0.5 * MIL
+    assert not any(w.startswith(("hemisphere:", "mirror root:")) for w in south.warnings)
+    with pytest.raises(InputError):
+        monte_carlo(pose, ins, GRADE, 180.0, n_runs=2, hemisphere="up")
+
+
+def test_observability_bands_are_where_the_bounds_are_ten_times_their_best():
+    """Polar band: heading bound 10 x its equatorial value; equatorial band: latitude
+    bound 10 x its value at the pole (level table, closed forms of the CRLB test)."""
+    ins = Instrument(sample_rate=10.0)
+
+    def bound(lat_rad):
+        return crlb(Pose(lat_rad, 0.4), ins, GRADE, 180.0)
+
+    assert bound(POLAR_BAND).heading[-1] / bound(0.0).heading[-1] == pytest.approx(10, rel=1e-3)
+    near_pole = math.radians(89.99)
+    ratio = bound(EQUATORIAL_BAND).lat[-1] / bound(near_pole).lat[-1]
+    assert ratio == pytest.approx(10.0 * math.sin(near_pole), rel=1e-3)
+    # E is the latitude on a level table and moves by the tilt toward north.
+    assert table_elevation(Pose.from_degrees(20, 0)) == pytest.approx(math.radians(20))
+    # Facing north nose-up tips the table normal south: E = L - pitch.
+    assert table_elevation(Pose.from_degrees(20, 0, 3, 0)) == pytest.approx(math.radians(17))
+
+
+@pytest.mark.parametrize("lat, unresolved", [(1.5, True), (3.0, False), (34.0, False)])
+def test_latitude_resolution_band_of_a_level_table(lat, unresolved):
+    """Level table, default grade, 3 min: the data resolve the latitude where
+    |L| >= 3 sigma_L, i.e. |L| sin|L| >= 3 sigma_A / Omega, |L| >~ 2.0 deg."""
+    sigma_a = GRADE.gyro_arw * math.sqrt(2.0 / 180.0)
+    edge = math.degrees(math.sqrt(3.0 * sigma_a / OMEGA))
+    assert edge == pytest.approx(2.03, abs=0.01)
+    res = monte_carlo(
+        Pose.from_degrees(lat, 30), Instrument(sample_rate=10.0), GRADE, 180.0, n_runs=2, seed=1
+    )
+    tags = [w.split(":")[0] for w in res.warnings]
+    assert ("latitude not resolved" in tags) is unresolved
+    assert ("equatorial band" in tags) is (lat < math.degrees(EQUATORIAL_BAND))
+
+
+def test_sigma_over_crlb_above_range_is_explained():
+    """At 150 deg/s the 1 s period sums keep sinc(75 deg) = 0.74 of the signal, so the
+    filter's sigma is ~1.35 x the raw-sample bound (100 runs: +-7 %)."""
+    ins = Instrument(table_rate=150.0 * DEG_PER_S, sample_rate=20.0)
+    res = monte_carlo(Pose.from_degrees(34, 30, 1, -2), ins, GRADE, 180.0, n_runs=100, seed=2)
+    ratio = res.heading_sigma()[-1] / res.bound.heading[-1]
+    assert ratio > 1.2
+    (msg,) = [w for w in res.warnings if w.startswith("sigma/CRLB")]
+    assert "sinc" in msg
+
+
+def test_diagnose_is_what_monte_carlo_stores():
+    pose = Pose.from_degrees(2, 30, 1, -2)
+    ins = Instrument(sample_rate=10.0)
+    res = monte_carlo(pose, ins, GRADE, 60.0, n_runs=3, seed=0)
+    assert list(res.warnings) == diagnose(res, pose, ins, GRADE)
+    assert res.summary()["warnings"] == list(res.warnings)
 
 
 # --- input errors -------------------------------------------------------------------------
@@ -405,6 +519,8 @@ def test_cli_done_when_command(capsys, tmp_path):
     ):
         assert key in res
     assert res["latitude_known"] is False
+    assert res["hemisphere_declared"] == "north"
+    assert res["warnings"] == []
     # 50 runs: sigma-hat spread ~10 %, so 20 % is a 2-sigma statement (the issue's bar).
     assert res["heading_error_1sigma_mil"] / res["crlb_heading_mil"] == pytest.approx(1, abs=0.2)
     saved = json.loads((out / "results.json").read_text())
@@ -435,3 +551,49 @@ def test_cli_bad_input_one_line_exit_2_no_output(change, flag, capsys, tmp_path)
     assert len(lines) == 1 and flag in lines[0]
     assert captured.out == ""
     assert not out.exists()
+
+
+def test_cli_declared_hemisphere_not_the_simulated_one(capsys):
+    """No --hemisphere means north, even at a southern --lat: mirror root and a warning."""
+    base = ["northfind", "--lat", "-34", "--heading", "30", "--pitch", "1", "--roll", "-2"]
+    fast = ["--runs", "10", "--minutes", "2", "--sample-rate", "10", "--json"]
+    assert main([*base, *fast]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["hemisphere_declared"] == "north"
+    assert abs(res["heading_bias_mil"]) > 40  # the mirror root is ~54 mil away
+    assert any(w.startswith("hemisphere:") for w in res["warnings"])
+    assert main([*base, *fast, "--hemisphere", "south"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["hemisphere_declared"] == "south"
+    assert abs(res["heading_bias_mil"]) < 1
+    assert res["warnings"] == []
+
+
+def test_cli_warns_at_the_equator(capsys):
+    """The audit's case: sigma 0.6 mil against a 7 mil bound, because the latitude is not
+    resolved and the hemisphere constraint biases the estimator."""
+    args = ["northfind", "--lat", "0", "--heading", "30", "--pitch", "1", "--roll", "-2"]
+    assert main([*args, "--runs", "50", "--seed", "1", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["heading_sigma_over_crlb"] < 0.8
+    tags = [w.split(":")[0] for w in res["warnings"]]
+    for tag in ("equatorial band", "latitude not resolved", "sigma/CRLB"):
+        assert tag in tags
+    (ratio,) = [w for w in res["warnings"] if w.startswith("sigma/CRLB")]
+    assert "not resolved" in ratio
+    assert main([*args, "--runs", "50", "--seed", "1"]) == 0
+    human = capsys.readouterr().out
+    assert "warnings:" in human and "equatorial band" in human
+    assert main([*args, "--runs", "5", "--latitude-known", "--json"]) == 0
+    known = json.loads(capsys.readouterr().out)
+    assert not any(w.startswith("equatorial band") for w in known["warnings"])
+
+
+def test_cli_warns_near_the_pole(capsys):
+    args = ["northfind", "--lat", "89.9", "--heading", "30", "--runs", "20", "--json"]
+    assert main(args) == 0
+    res = json.loads(capsys.readouterr().out)
+    tags = [w.split(":")[0] for w in res["warnings"]]
+    assert "polar band" in tags and "large errors" in tags
+    assert main([*args[:2], "84", *args[3:]]) == 0
+    assert "polar band" not in capsys.readouterr().out

@@ -144,3 +144,18 @@ def test_scheme_catalogue_and_bad_options():
         NullingTwoPosition(RATE, TS, variant="crossing")
     with pytest.raises(InputError):
         NullingTwoPosition(RATE, TS, f=0.0)
+
+
+def test_reversals_through_a_hold_are_found():
+    """Turn right 10 s, hold 10 s (rate exactly 0), turn left 10 s, hold, right again.
+
+    The rate never changes sign between two adjacent samples, only across the holds:
+    the reversals are the middles of the holds, 15 s and 35 s (exact for this
+    piecewise-linear heading; the samples fall on the hold edges).
+    """
+    from inserr.motion import HeadingHistory
+
+    times = np.array([0.0, 10.0, 20.0, 30.0, 40.0, 50.0])
+    headings = np.radians([0.0, 10.0, 10.0, 0.0, 0.0, 10.0])
+    rev = yaw_rate_reversals(HeadingHistory(times=times, headings=headings), 50.0, 10.0)
+    np.testing.assert_allclose(rev, [15.0, 35.0], atol=0.06)

@@ -202,3 +202,26 @@ def test_results_do_not_depend_on_cache_history():
     run("flexible-two-position")  # fills the cache with other sub-steps
     again = run("two-position")
     assert np.array_equal(fresh[0], again[0]) and np.array_equal(fresh[1], again[1])
+
+
+@pytest.mark.parametrize(
+    "t_out", [[0.0, 50.0, 50.0, 100.0], [0.0, 50.0, 150.0], [10.0, 5.0], [0.0, np.nan]]
+)
+def test_bad_output_grids_are_refused_not_extrapolated(t_out):
+    # A duplicate time used to leave its row uninitialised; a time past the end was
+    # extrapolated with the last interval's rate. Both must fail loudly.
+    model = ErrorModel(Site(0.6), Layout(bias=True))
+    tl = Timeline.static(np.eye(3), 100.0)
+    with pytest.raises(ValueError, match="output times"):
+        propagate_states(Discretizer(model), tl, np.zeros(model.layout.n), np.array(t_out))
+
+
+def test_cycle_integrals_accept_a_motion_that_does_not_move():
+    from inserr.cycle import cycle_integrals
+    from inserr.motion import Motion, Turn
+    from inserr.schemes import build_scheme
+
+    scheme = build_scheme("four-position", math.radians(6.0), 300.0)
+    a = cycle_integrals(scheme, Motion())
+    b = cycle_integrals(scheme, Turn(rate=0.0))
+    np.testing.assert_allclose(a.full, b.full, rtol=0, atol=1e-12)

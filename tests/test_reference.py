@@ -304,6 +304,24 @@ def test_chi2_test_matches_its_distribution():
     assert abs(passed / 400 - 0.99) < 5 * math.sqrt(0.99 * 0.01 / 400)
 
 
+def test_chi2_resolution_is_reported():
+    # The accepted spread ratio is sqrt(chi2 bound / dof): scaling every sample by a
+    # ratio inside it passes, outside it fails (the statistic scales with its square).
+    from inserr.validation import chi2_consistency
+
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal((3, 2))
+    x = (x - x.mean(axis=0)) / np.sqrt(np.sum(x.var(axis=0, ddof=1)) / 2)  # spread ratio 1
+    cov = np.eye(2)
+    d = chi2_consistency(x, cov, 0.95).as_dict()
+    lo, hi = d["accepted_sigma_ratio"]
+    assert 0.3 < lo < 0.4 and 1.6 < hi < 1.8  # 4 dof at 95 %
+    assert "more runs" in d["note"]
+    assert chi2_consistency(x * 0.99 * hi, cov, 0.95).consistent
+    assert not chi2_consistency(x * 1.01 * hi, cov, 0.95).consistent
+    assert not chi2_consistency(x * 0.99 * lo, cov, 0.95).consistent
+
+
 def test_same_seed_same_numbers_other_seed_other_numbers(pyins):
     from inserr.validation import validate
 

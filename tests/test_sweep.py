@@ -1,10 +1,13 @@
-"""``inserr sweep``: grid syntax and validation, engines, determinism, resume, failures."""
+"""``inserr sweep``: grid syntax and validation, engines, determinism, resume, failures,
+output directory names, figures and their labels."""
 
 from __future__ import annotations
 
 import csv
+import io
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -16,7 +19,8 @@ import pytest
 
 from inserr.cli.main import main
 from inserr.scenario import scenario_from_dict
-from inserr.sweep import build_grid, parse_param
+from inserr.sweep import build_grid, default_out_dir, parse_param, slug
+from inserr.sweep_store import is_sweep_figure, sweep_figures
 from inserr.units import DEG, HOUR, MICRO_G
 
 # One-hour scenarios keep every point well under a second. The budget has a
@@ -29,10 +33,12 @@ GRID = ["--param", "stop=20,30", "--param", "rate=6,10"]
 
 
 def sweep(tmp: Path, *extra: str, grid: list[str] = GRID) -> int:
+    """Run ``inserr sweep`` on :data:`BASE` without plots into ``tmp``; return the exit status."""
     return main(["sweep", *BASE, *grid, "--no-plots", "--out", str(tmp), *extra])
 
 
 def rows(out: Path) -> list[dict[str, str]]:
+    """The rows of ``out/results.csv`` (all values as text)."""
     with open(out / "results.csv", newline="") as f:
         return list(csv.DictReader(f))
 
@@ -47,6 +53,7 @@ def sync_run(tmp_path_factory) -> Path:
 
 # --- the grid ----------------------------------------------------------------------------
 def test_param_syntax_flags_dotted_and_brackets():
+    """Flag names, dotted keys, bracketed triples and pairs parse into scenario changes."""
     stop = parse_param("stop=60,2 min")
     assert stop.changes == ({"scheme.stop": "60 s"}, {"scheme.stop": "2 min"})
     assert stop.axis() == ([60.0, 120.0], "stop (s)")
@@ -68,6 +75,7 @@ def test_param_syntax_flags_dotted_and_brackets():
 
 
 def test_grid_values_reach_the_scenario():
+    """Each point's scenario holds its values (last parameter fastest)."""
     base = scenario_from_dict({"scheme": {"name": "two-position"}})
     grid = build_grid(base, ["rate=3,6", "imu.gyro_bias=[0.01,0.02,0.03] deg/h,0.5 deg/h"])
     assert grid.shape == (2, 2) and len(grid.points) == 4
@@ -78,6 +86,7 @@ def test_grid_values_reach_the_scenario():
 
 
 def test_point_identity_and_seed_do_not_depend_on_the_grid():
+    """Ids and seeds depend on the point, not on the grid it is in."""
     base = scenario_from_dict({"scenario": {"seed": 7}})
     small = build_grid(base, ["stop=60,300", "rate=3"])
     big = build_grid(base, ["stop=30,300,60", "rate=3"])
@@ -89,6 +98,45 @@ def test_point_identity_and_seed_do_not_depend_on_the_grid():
         scenario_from_dict({"scenario": {"seed": 8}}), ["stop=60,300", "rate=3"]
     )
     assert {pt.seed for pt in other_seed.points}.isdisjoint({pt.seed for pt in small.points})
+
+
+def test_point_identity_follows_the_inserr_version(monkeypatch):
+    """A new version gives new point ids (recomputed on resume) but the same seeds."""
+    import inserr
+
+    base = scenario_from_dict({"scheme": {"name": "four-position"}})
+    before = build_grid(base, ["stop=60,300"]).points
+    monkeypatch.setattr(inserr, "__version__", inserr.__version__ + ".post1")
+    after = build_grid(base, ["stop=60,300"]).points
+    assert {pt.id for pt in before}.isdisjoint({pt.id for pt in after})
+    assert [pt.seed for pt in before] == [pt.seed for pt in after]
+
+
+def test_changed_heading_history_file_recomputes_the_point(tmp_path, capsys, count_runs):
+    """Editing the CSV a scenario references (motion.file) makes finished points run again."""
+    csv_path = tmp_path / "heading.csv"
+    csv_path.write_text("# time_s, heading_deg\n0,0\n3600,10\n")
+    scen = tmp_path / "moving.toml"
+    scen.write_text(
+        '[scenario]\nduration = "1 h"\n[motion]\ntype = "heading-history"\nfile = "heading.csv"\n'
+    )
+    out = tmp_path / "out"
+
+    def run() -> dict:
+        capsys.readouterr()
+        args = [str(scen), *BASE, "--param", "stop=20,30", "--workers", "1", "--no-plots"]
+        assert main(["sweep", *args, "--out", str(out), "--json"]) == 0
+        return json.loads(capsys.readouterr().out)
+
+    assert run()["computed"] == 2
+    assert run()["computed"] == 0  # same file: resumed
+    first = rows(out)
+    csv_path.write_text("# time_s, heading_deg\n0,0\n3600,90\n")  # same name, new data
+    again = run()
+    assert (again["computed"], again["resumed"]) == (2, 0)
+    assert len(count_runs) == 4
+    assert [r["seed"] for r in rows(out)] == [r["seed"] for r in first]
+    assert rows(out) != first  # the new heading history gave new numbers
 
 
 @pytest.mark.parametrize(
@@ -112,6 +160,7 @@ def test_point_identity_and_seed_do_not_depend_on_the_grid():
     ],
 )
 def test_invalid_grids_fail_before_any_work(tmp_path, capsys, params, fragment):
+    """Bad grids are one-line input errors, with no output directory made."""
     out = tmp_path / "out"
     grid = [x for p in params for x in ("--param", p)]
     assert main(["sweep", *BASE, *grid, "--out", str(out)]) == 2
@@ -121,6 +170,7 @@ def test_invalid_grids_fail_before_any_work(tmp_path, capsys, params, fragment):
 
 
 def test_unreachable_cluster_fails_before_any_work(tmp_path, capsys):
+    """An unknown scheduler fails before the output directory exists."""
     out = tmp_path / "out"
     code = main(["sweep", *BASE, *GRID, "--scheduler", "not-a-scheduler", "--out", str(out)])
     assert code == 2 and "--scheduler" in capsys.readouterr().err
@@ -129,6 +179,7 @@ def test_unreachable_cluster_fails_before_any_work(tmp_path, capsys):
 
 # --- running -----------------------------------------------------------------------------
 def test_small_grid_locally(sync_run):
+    """Each row is the drift analysis of the base scenario with that point's values."""
     table = rows(sync_run)
     assert [(r["stop"], r["rate"]) for r in table] == [
         ("20", "6"), ("20", "10"), ("30", "6"), ("30", "10")
@@ -156,21 +207,160 @@ def test_small_grid_locally(sync_run):
     assert len(list((sync_run / "points").glob("*.json"))) == 4
 
 
-def test_plots_follow_the_number_of_parameters(tmp_path):
+def _png(**savefig) -> bytes:
+    """A small PNG drawn by matplotlib (not by inserr sweep unless ``metadata`` says so)."""
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=(1, 1))
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", **savefig)
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def test_figures_always_belong_to_the_current_results(tmp_path):
+    """Each run leaves exactly its own figures; files inserr did not write stay as they are."""
+    from inserr.sweep_run import LocalEngine, run_sweep
+
+    out = tmp_path / "out"
+    out.mkdir()
+    foreign = {  # the user's files, some named like inserr's figures
+        "sweep_mine.png": _png(),
+        "sweep_max_horizontal_error_nmi.png.bak": _png(),
+        "notes.txt": b"keep me",
+    }
+    for name, data in foreign.items():
+        (out / name).write_bytes(data)
+
+    def figures_now() -> set[str]:
+        return {p.name for p in sweep_figures(out)}
+
+    facets = {"sweep_max_horizontal_error_nmi.png", "sweep_worst_case_horizontal_error_nmi.png"}
     for grid, names in [
-        (["--param", "stop=60,300"], {"sweep.png"}),
+        ([*GRID, "--param", "lat=20,40"], facets),
+        (["--param", "stop=60,300"], {"sweep.png"}),  # the facets of the last grid must go
         (GRID, {"sweep.png"}),
-        (
-            [*GRID, "--param", "lat=20,40"],
-            {"sweep_max_horizontal_error_nmi.png", "sweep_worst_case_horizontal_error_nmi.png"},
-        ),
     ]:
-        out = tmp_path / str(len(grid))
         assert main(["sweep", *BASE, *grid, "--workers", "1", "--out", str(out)]) == 0
-        assert {p.name for p in out.glob("*.png")} == names
+        assert figures_now() == names
+        assert {p.name for p in out.glob("*.png")} == names | {"sweep_mine.png"}
+
+    class Interrupted(LocalEngine):
+        def run(self, tasks, on_result):
+            raise KeyboardInterrupt
+
+    grid = build_grid(scenario_from_dict({"scheme": {"name": "four-position"}}), ["stop=45,90"])
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(grid, out, scheduler=Interrupted("sync", 1))
+    assert [r["status"] for r in rows(out)] == ["pending"] * 2
+    assert figures_now() == set()  # the figures showed the earlier grid's results
+
+    assert main(["sweep", *BASE, *GRID, "--workers", "1", "--out", str(out)]) == 0
+    assert figures_now() == {"sweep.png"}
+    assert sweep(out, "--workers", "1") == 0  # --no-plots: no figure of other results is left
+    assert figures_now() == set()
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.name in foreign} == foreign
+
+
+def test_figure_mark_is_read_from_the_png_chunks(tmp_path):
+    """Only PNG files with inserr's text chunk count as inserr's figures."""
+    from inserr.sweep_store import FIGURE_MARK
+
+    cases = {
+        "marked.png": _png(metadata=dict([FIGURE_MARK])),
+        "plain.png": _png(),
+        "other_text.png": _png(metadata={"inserr": "some other figure"}),
+        "not_a_png.png": b"sweep figure",
+        "truncated.png": _png(metadata=dict([FIGURE_MARK]))[:20],
+    }
+    for name, data in cases.items():
+        (tmp_path / name).write_bytes(data)
+    assert [p.name for p in sweep_figures(tmp_path)] == ["marked.png"]
+    assert not is_sweep_figure(tmp_path / "missing.png")
+
+
+def _fake_table(grid) -> tuple[list[str], list[list]]:
+    """A results table for ``grid`` with made-up errors (nmi), without running anything."""
+    header = ["point", *(p.name for p in grid.params), "seed", "status",
+              "max_horizontal_error_nmi", "rms_horizontal_error_nmi",
+              "worst_case_horizontal_error_nmi", "error"]  # fmt: skip
+    table = [
+        [pt.index, *pt.values, pt.seed, "ok", 1.0 + pt.index, 0.5 + pt.index, 2.0 + pt.index, ""]
+        for pt in grid.points
+    ]
+    return header, table
+
+
+def test_plot_axes_carry_units():
+    """Heatmap and line axes name the unit of the values (the flag's, or the written one)."""
+    import matplotlib.pyplot as plt
+
+    from inserr.sweep_plots import figures
+
+    base = scenario_from_dict({"scheme": {"name": "four-position"}})
+
+    def draw(params):
+        grid = build_grid(base, params)
+        figs = figures(grid, *_fake_table(grid))
+        axes = [ax for fig in figs.values() for ax in fig.axes if ax.get_label() != "<colorbar>"]
+        for fig in figs.values():
+            plt.close(fig)
+        return axes
+
+    heat = draw(["stop=20,1 min", "rate=6,10"])
+    assert {(ax.get_ylabel(), ax.get_xlabel()) for ax in heat} == {("stop (s)", "rate (deg/s)")}
+    assert [t.get_text() for t in heat[0].get_yticklabels()] == ["20", "60"]
+    assert [t.get_text() for t in heat[0].get_xticklabels()] == ["6", "10"]
+
+    dotted = draw(["scheme.stop=20 s,1 min", "imu.gyro_bias=[0.01,0.02,0.03] deg/h,0.5 deg/h"])
+    assert (dotted[0].get_ylabel(), dotted[0].get_xlabel()) == (
+        "scheme.stop (s)",
+        "imu.gyro_bias (deg/h)",
+    )
+    assert [t.get_text() for t in dotted[0].get_xticklabels()] == ["[0.01,0.02,0.03]", "0.5"]
+
+    (line,) = draw(["gyro-bias=[0.01,0.02,0.03],0.02"])
+    assert line.get_xlabel() == "gyro-bias (deg/h)"
+    (line,) = draw(["yaw-swing=[6,60],[3,120]"])
+    assert line.get_xlabel() == "yaw-swing (deg/s, s)"
+    (line,) = draw(["scheme=two-position,four-position"])
+    assert line.get_xlabel() == "scheme"  # names have no unit
+
+    facets = draw(["stop=20,30", "rate=6,10", "lat=20,40"])
+    assert {ax.get_xlabel() for ax in facets} == {"rate (deg/s)"}
+    assert [ax.get_title() for ax in facets[:2]] == ["lat=20 deg", "lat=40 deg"]
+
+
+# --- output directory --------------------------------------------------------------------
+def test_slug_is_a_safe_directory_name():
+    """Spaces, colons, commas, slashes and accents never reach the directory name."""
+    name = "sweep-quickstart: 72 h at rest, single- and dual-axis indexing"
+    assert slug(name) == "sweep-quickstart-72-h-at-rest-single-and-dual-axis-indexing"
+    for text in [name, "a/b\\c", "../..", "Étude N°2", "", "x" * 200, ":::", "A_b-C.toml"]:
+        assert re.fullmatch(r"[a-z0-9][a-z0-9_-]*", slug(text)), text
+        assert len(slug(text)) <= 60
+    assert slug("../..") == "scenario"
+    scen = scenario_from_dict({"scenario": {"name": name}})
+    assert default_out_dir(scen) == f"sweep-{slug(name)}"
+    assert default_out_dir(scen, "analyses/quickstart/Quick Start.toml") == "sweep-quick-start"
+
+
+def test_default_out_is_named_after_the_scenario_file(tmp_path, monkeypatch):
+    """Without --out, the directory is sweep-<slug of the file stem>, in the working directory."""
+    name = "sweep-quickstart: 72 h at rest, single- and dual-axis indexing"
+    (tmp_path / "Quick Start, v2.toml").write_text(
+        f'[scenario]\nname = "{name}"\nduration = "1 h"\n', encoding="utf-8"
+    )
+    monkeypatch.chdir(tmp_path)
+    code = main(["sweep", "Quick Start, v2.toml", *BASE, "--param", "stop=20", "--no-plots"])
+    assert code == 0
+    made = sorted(p.name for p in tmp_path.iterdir() if p.is_dir())
+    assert made == ["sweep-quick-start-v2"]
+    assert [r["status"] for r in rows(tmp_path / made[0])] == ["ok"]
 
 
 def test_processes_give_identical_results(sync_run, tmp_path):
+    """Two worker processes give the same results.csv as one process."""
     out = tmp_path / "out"
     code = sweep(out, "--workers", "2", "--scheduler", "processes")
     assert code == 0, (out / "results.csv").read_text()
@@ -178,6 +368,7 @@ def test_processes_give_identical_results(sync_run, tmp_path):
 
 
 def test_loopback_cluster_gives_identical_results(sync_run, tmp_path):
+    """A local dask.distributed cluster gives the same results.csv."""
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(
         host="127.0.0.1", n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
@@ -206,6 +397,7 @@ def count_runs(monkeypatch):
 
 
 def test_resume_redoes_only_missing_points(sync_run, tmp_path, capsys, count_runs):
+    """A rerun computes only the points without a finished record."""
     out = tmp_path / "out"
     assert sweep(out, "--workers", "1") == 0
     assert len(count_runs) == 4
@@ -223,6 +415,7 @@ def test_resume_redoes_only_missing_points(sync_run, tmp_path, capsys, count_run
 
 
 def test_growing_the_grid_reuses_finished_points(tmp_path, capsys, count_runs):
+    """Adding values to a grid computes only the new points."""
     out = tmp_path / "out"
     assert sweep(out, "--workers", "1", grid=["--param", "stop=60,300"]) == 0
     capsys.readouterr()
@@ -232,6 +425,7 @@ def test_growing_the_grid_reuses_finished_points(tmp_path, capsys, count_runs):
 
 
 def test_failing_point_does_not_sink_the_sweep(tmp_path, monkeypatch, capsys):
+    """A point that raises is recorded as failed and retried on a rerun."""
     import inserr.summary
 
     real = inserr.summary.run_scheme
@@ -256,6 +450,7 @@ def test_failing_point_does_not_sink_the_sweep(tmp_path, monkeypatch, capsys):
 
 
 def test_invalid_combination_is_recorded_and_the_rest_go_on(tmp_path):
+    """An invalid combination is recorded as invalid; the other points run."""
     out = tmp_path / "out"
     grid = ["--param", "scheme=continuous,two-position", "--param", "stop=0,60"]
     assert sweep(out, "--workers", "1", grid=grid) == 0
@@ -265,6 +460,7 @@ def test_invalid_combination_is_recorded_and_the_rest_go_on(tmp_path):
 
 
 def test_killed_sweep_resumes_without_redoing_finished_points(tmp_path):
+    """A killed sweep leaves whole records, and a rerun finishes the rest."""
     out = tmp_path / "out"
     cmd = [
         sys.executable,
@@ -322,6 +518,7 @@ def _spawned_workers(parent: int) -> list[int]:
 
 @pytest.mark.skipif(not Path("/proc").is_dir(), reason="needs /proc to find worker processes")
 def test_lost_worker_fails_its_points_only(tmp_path):
+    """A killed worker process fails its points only; a rerun retries them."""
     out = tmp_path / "out"
     cmd = [
         sys.executable,

@@ -59,6 +59,7 @@ from inserr.units import (
     DEG_PER_SQRT_HOUR,
     MICRO_G,
     MICRO_G_PER_SQRT_HZ,
+    PPM,
     parse_quantity,
 )
 
@@ -105,8 +106,8 @@ def load(path: Path) -> tuple:
         "swing_amplitude": q(swing, "amplitude", "angular_rate", "swing"),
         "swing_period": q(swing, "period", "time", "swing"),
     }
-    if scen.imu.has_scale_misalignment or scen.imu.has_bias_instability:
-        raise InputError("imu", "the alignment study models biases and white noise only")
+    if scen.imu.has_bias_instability:
+        raise InputError("imu", "the alignment study models constant biases and white noise only")
     return scen, cfg
 
 
@@ -190,15 +191,48 @@ def observability(site, base: Base, names, duration: float, vertical: str) -> di
         tl = alignment_timeline(base, name, duration)
         entry = {}
         for pos in (False, True):
-            r = analyze(full_timeline(model, tl, position=pos))
+            system = full_timeline(model, tl, position=pos)
+            r = analyze(system)
             entry["zupt_position" if pos else "zupt"] = {
                 "n_states": r.n_states,
                 "rank": r.rank,
                 "rank_gap": r.gap,
                 "unobservable": list(r.unobservable),
                 "smallest_singular_values": r.singular_values[-4:].tolist(),
+                "separately_observable": separately_observable(model, system, r, tl.c_sn[0]),
             }
         out[name] = entry
+    return out
+
+
+def separately_observable(model, system, result, c_sn0) -> dict[str, bool]:
+    """Which reported states (:data:`SHOWN`) the TOM determines on their own.
+
+    A reported state ``y_i = m_i . x`` (attitude phi, IMU-frame biases at t = 0) is
+    observable iff ``m_i`` is orthogonal to the TOM null space. Checked in the
+    system's scaled units, where the null-space basis is orthonormal, with a cosine
+    threshold of 1e-6 (the rank tolerance is far coarser, so this cannot flip on
+    round-off). Attitude is judged as psi: phi = psi + dr/R also carries the position
+    error, which zero-velocity updates never see, but that term is dr/R (0.3 arcsec
+    for 10 m) and not what "is heading observable" asks.
+    """
+    from inserr.alignment import report_transform
+
+    m = report_transform(model, c_sn0)
+    cols = [model.layout.names.index(nm) for nm in system.names]
+    scale = np.asarray(system.scale, dtype=float)
+    null = result.null_space / scale[:, None]
+    out = {}
+    for state in SHOWN:
+        row = m[STATES.index(state), cols].copy()
+        if state.startswith("phi_"):
+            row[[k for k, nm in enumerate(system.names) if nm.startswith("dr_")]] = 0.0
+        row *= scale
+        if null.size == 0:
+            out[state] = True
+            continue
+        cos = np.abs(row @ null) / (np.linalg.norm(row) * np.linalg.norm(null, axis=0))
+        out[state] = bool(np.max(cos) < 1e-6)
     return out
 
 
@@ -275,7 +309,12 @@ def _setup_lines(res: dict) -> list[str]:
         f"heading {s['heading_deg']:g}°, pitch {s['pitch_deg']:g}°, roll {s['roll_deg']:g}°.",
         f"- IMU (P0 budget): gyro bias {s['gyro_bias_deg_h']:g} °/h, accelerometer bias "
         f"{s['accel_bias_ug']:g} µg (prior 1σ of the bias states and the true biases of the "
-        f"simulated run), ARW {s['arw_deg_rt_h']:g} °/√h, VRW {s['vrw_ug_rt_hz']:g} µg/√Hz.",
+        f"simulated run), ARW {s['arw_deg_rt_h']:g} °/√h, VRW {s['vrw_ug_rt_hz']:g} µg/√Hz; "
+        f"scale factors {s['gyro_sf_ppm']:g} / {s['accel_sf_ppm']:g} ppm and misalignments "
+        f"{s['gyro_misalignment_arcsec']:g} / {s['accel_misalignment_arcsec']:g}″ (gyro / "
+        "accelerometer, all axes) act on the simulated run only: the classic alignment filter "
+        "does not model them, so they cannot change any σ below, only the errors of the "
+        "simulated run (see *What the unmodelled errors cost*).",
         f"- Alignment {s['minutes']:g} min; zero-velocity updates at {s['zupt_rate_hz']:g} Hz "
         f"with 1σ {s['zupt_sigma_m_s'] * 1e3:g} mm/s on all three axes ({s['vertical']} "
         "vertical channel), no position updates; prior 1σ: tilt "
@@ -288,9 +327,10 @@ def _setup_lines(res: dict) -> list[str]:
         "scheme; levelling takes seconds and one stop needs about a minute to show the "
         "Earth-rate signature of heading, so 60 s stops give several positions in 10 minutes "
         "(see the stop-time sweep).",
-        f"- Static floors for this budget (table at its zero): φE {fl['phi_e_arcsec']:.3g}″, "
-        f"φN {fl['phi_n_arcsec']:.3g}″ (∇/g), heading {fl['phi_u_arcmin']:.3g}′ "
-        "(ε_E/(Ω cos L)).",
+        f"- Static floors for this budget and prior (table at its zero): φE "
+        f"{fl['phi_e_arcsec']:.3g}″, φN {fl['phi_n_arcsec']:.3g}″ (∇/g), heading "
+        f"{fl['phi_u_arcmin']:.3g}′ (ε_E/(Ω cos L)), each combined with the attitude prior "
+        "as 1/σ² = 1/σ_prior² + 1/floor² (a 0.5 % effect here).",
         "",
     ]
 
@@ -397,15 +437,24 @@ def _filter_lines(res: dict, names: list[str]) -> list[str]:
     lines += [
         "## Which states each scheme makes observable",
         "",
-        f"Classes from the degree of observability at the end of the alignment: well "
-        f"estimated (σ reduced at least {WELL:g}×), partly (between), not estimated (σ reduced "
-        f"less than {(1 - 1 / NOT) * 100:.0f} %).",
+        "Two different questions. *Separately observable* is structural: the state is "
+        "orthogonal to the null space of the stacked observability matrix of the scheme's "
+        "timeline (zero-velocity updates, position known — with the position unknown every "
+        "attitude and bias picks up a tiny dr/R or Earth-rate-times-dr coupling and nothing is "
+        "formally separable). *σ reduction* is what the 10-minute filter achieved from its "
+        f"prior: reduced at least {WELL:g}× (strongly), less than "
+        f"{(1 - 1 / NOT) * 100:.0f} % (not), or between (partly). A state can be strongly "
+        "reduced yet not separately observable — static heading falls from its 60′ prior to "
+        "the ε_E/(Ω cos L) floor and stops there, held by the unobservable combination.",
         "",
     ]
     for n in names:
         cl = st[n]["classes"]
+        sep = res["observability"][n]["zupt_position"]["separately_observable"]
+        yes = [k for k, v in sep.items() if v]
         lines.append(
-            f"- **{n}** — well: {_states(cl['well'])}; partly: {_states(cl['partly'])}; "
+            f"- **{n}** — separately observable: {_states(yes) if yes else 'none'}; "
+            f"σ reduced strongly: {_states(cl['well'])}; partly: {_states(cl['partly'])}; "
             f"not: {_states(cl['not'])}."
         )
 
@@ -614,6 +663,56 @@ def _swing_lines(res: dict) -> list[str]:
     return lines + _table(header, rows)
 
 
+def _unmodelled_lines(res: dict, names: list[str]) -> list[str]:
+    """Final attitude errors of the simulated run with and without K = S + M."""
+    s = res["settings"]
+    keys = ("phi_e_arcsec", "phi_n_arcsec", "phi_u_arcmin")
+    rows, kick = [], {}
+    for n in names:
+        fs = res["static"][n]["final_sigma"]
+        with_k = res["static"][n]["final_error"]
+        without = res["static_bias_only_error"][n]
+        row = [n]
+        for k in keys:
+            row += [_f(fs[k]), _f(without[k]), _f(with_k[k])]
+        rows.append(row)
+        kick[n] = max(
+            abs(with_k[k] - without[k]) / fs[k] for k in keys
+        )  # K's own contribution, in units of sigma
+    units = ("″", "″", "′")
+    header = ["scheme"]
+    for k, u in zip(("φE", "φN", "heading"), units, strict=True):
+        header += [f"{k} σ ({u})", f"{k} error, biases only ({u})", f"{k} error, with K ({u})"]
+    worst = max(kick, key=kick.get)
+    still = [n for n in names if kick[n] < 0.1]
+    lines = [
+        "## What the unmodelled errors cost",
+        "",
+        f"The simulated runs carry P0's scale factors ({s['gyro_sf_ppm']:g} ppm) and "
+        f"misalignments ({s['gyro_misalignment_arcsec']:g}″); the filter does not. Each table "
+        "turn of angle θ about up then kicks the true attitude: a misalignment m coupling the "
+        "up rate into a horizontal gyro adds m·∫ω_z about an axis that turns with the table "
+        "(2m of tilt for a 180° turn), and the z scale factor adds s_z·θ of heading. The same "
+        "runs without those errors (same noise realization) isolate their effect; final "
+        "static-base errors of one simulated run:",
+        "",
+    ]
+    lines += _table(header, rows)
+    lines += [
+        f"Largest effect of the unmodelled errors: **{worst}**, "
+        f"{kick[worst]:.2g}σ on its worst attitude component; under 0.1σ: "
+        f"{', '.join(still) if still else 'no scheme'}. A scheme that turns during alignment "
+        "needs its misalignments calibrated (or modelled) to the level where m·θ is well below "
+        "the σ it promises; the σ of the tables above assume exactly that. Even without turns "
+        "(`none`) K acts through gravity and Earth rate: an accelerometer misalignment of "
+        f"{s['accel_misalignment_arcsec']:g}″ puts g·m on a horizontal axis, "
+        f"{s['accel_misalignment_arcsec']:g}″ of apparent tilt that no static alignment can "
+        "tell from level.",
+        "",
+    ]
+    return lines
+
+
 def report_md(res: dict) -> str:
     names = list(res["static"])
     lines = [
@@ -627,6 +726,7 @@ def report_md(res: dict) -> str:
     lines += _observability_lines(res, names)
     lines += _filter_lines(res, names)
     lines += _cost_lines(res, names)
+    lines += _unmodelled_lines(res, names)
     lines += _swing_lines(res)
     for png, caption in (
         ("sigma_static", "1σ of attitude and IMU-frame biases during alignment, static base."),
@@ -700,6 +800,15 @@ def main(argv: list[str] | None = None) -> int:
         accel_bias=scen.imu.accel_bias,
         arw=scen.imu.arw,
         vrw=scen.imu.vrw,
+        gyro_scale_factor=scen.imu.gyro_scale_factor,
+        accel_scale_factor=scen.imu.accel_scale_factor,
+        gyro_misalignment=scen.imu.gyro_misalignment,
+        accel_misalignment=scen.imu.accel_misalignment,
+    )
+    # The same runs without the scale factors and misalignments the filter does not
+    # model (same noise realization), to show what they cost.
+    imu_bias_only = ImuErrors(
+        gyro_bias=imu.gyro_bias, accel_bias=imu.accel_bias, arw=imu.arw, vrw=imu.vrw
     )
     tilt, head = cfg["initial_tilt"], cfg["initial_heading"]
     prior = Prior(
@@ -716,9 +825,12 @@ def main(argv: list[str] | None = None) -> int:
         seed=scen.seed,
     )
     base = Base(site, motion, scen.scheme_rate, scen.scheme_stop, scen.substep)
-    floors = static_floors(site, imu.gyro_bias, imu.accel_bias, motion.attitude(0.0)[0])
+    floors = static_floors(
+        site, imu.gyro_bias, imu.accel_bias, motion.attitude(0.0)[0], prior.attitude
+    )
 
     static = run_schemes(base, names, duration, imu, prior, settings)
+    static_bias_only = run_schemes(base, names, duration, imu_bias_only, prior, settings)
     swing_motion = YawSwing(
         motion.heading,
         motion.pitch,
@@ -745,6 +857,10 @@ def main(argv: list[str] | None = None) -> int:
             "accel_bias_ug": float(imu.accel_bias[0] / MICRO_G),
             "arw_deg_rt_h": float(imu.arw / DEG_PER_SQRT_HOUR),
             "vrw_ug_rt_hz": float(imu.vrw / MICRO_G_PER_SQRT_HZ),
+            "gyro_sf_ppm": float(imu.gyro_scale_factor[0] / PPM),
+            "accel_sf_ppm": float(imu.accel_scale_factor[0] / PPM),
+            "gyro_misalignment_arcsec": float(imu.gyro_misalignment[0] / ARCSEC),
+            "accel_misalignment_arcsec": float(imu.accel_misalignment[0] / ARCSEC),
             "minutes": duration / 60.0,
             "zupt_rate_hz": settings.zupt_rate,
             "zupt_sigma_m_s": settings.zupt_sigma,
@@ -768,6 +884,9 @@ def main(argv: list[str] | None = None) -> int:
         "classic": classic(site, motion.heading),
         "observability": observability(site, base, names, duration, settings.vertical),
         "static": summarize(static, base, duration, floors, prior),
+        "static_bias_only_error": {
+            n: r.summary()["final_error"] for n, r in static_bias_only.items()
+        },
         "swing": summarize(swing, swing_base, duration, floors, prior),
         "stop_sweep": sweep_rows,
     }

@@ -45,6 +45,9 @@ from inserr.calibration_report import (
     calibration_summary,
     deviation_figure,
     parameter_rows,
+    sensitivity_axes_text,
+    sensitivity_rows,
+    sensitivity_table,
     std_figure,
 )
 from inserr.earth import Site
@@ -489,6 +492,59 @@ def verdict_text(v: dict[str, Any], sc: dict[str, Any], four: str, six: str) -> 
     return [*out, claim]
 
 
+CLASS_WORDS = {"sf": "scale factors", "mis": "misalignments", "bias": "biases"}
+
+
+def _where(at: list[dict[str, str]], n_positions: int) -> str:
+    """``[{p4, about_east}, {p5, about_east}]`` -> ``"about east at p4 and p5"``."""
+    groups: dict[str, list[str]] = {}
+    for e in at:
+        groups.setdefault(e["axis"].removeprefix("about_").replace("_", " "), []).append(
+            e["position"]
+        )
+    out = []
+    for axis, ps in groups.items():
+        where = "every position" if len(ps) == n_positions else _and(ps)
+        out.append(f"about {axis} at {where}")
+    return "; ".join(out)
+
+
+def _and(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + f" and {items[-1]}"
+
+
+def sensitivity_sentence(name: str, block: dict[str, Any], half_width_arcsec: float) -> str:
+    """One sentence: the most sensitive parameter(s) of each class and what the table does.
+
+    ``block`` is a ``positioning_sensitivity`` block of
+    :func:`inserr.calibration_report.calibration_summary` (parameter unit per arcsec);
+    classes are compared separately because their units differ. Parameters within 1e-6
+    of the class maximum are named together.
+    """
+    rows = {r[0]: r for r in sensitivity_rows(block)}
+    n_pos = len(next(iter(block.values()))["positions"])
+    parts, effects = [], []
+    for cls, sl in CLASSES.items():
+        # identifiable parameters only
+        vals = {n: float(rows[n][2]) for n in PARAMETER_NAMES[sl] if rows[n][2] != "n/a"}
+        top = max(vals.values())
+        group = [n for n, v in vals.items() if v >= top * (1.0 - 1e-6)]
+        unit = block[group[0]]["unit"]
+        if len(group) == 1:
+            where = f", {_where(block[group[0]]['largest']['at'], n_pos)}" if top > 0 else ""
+            parts.append(f"{group[0]} among the {CLASS_WORDS[cls]} ({top:.3g} {unit}{where})")
+        elif len(group) == len(vals):
+            parts.append(f"all {len(group)} {CLASS_WORDS[cls]} equally ({top:.3g} {unit})")
+        else:
+            parts.append(f"{_and(group)} among the {CLASS_WORDS[cls]} ({top:.3g} {unit})")
+        effects.append(f"{top * half_width_arcsec:.2g} {unit.removesuffix('/arcsec').strip('()')}")
+    return (
+        f"**{name}.** Most sensitive to the positioning error: {parts[0]}; {parts[1]}; "
+        f"{parts[2]} - so a +-{half_width_arcsec:.3g} arcsec error at one position moves a "
+        f"parameter by at most {effects[0]}, {effects[1]} and {effects[2]} respectively."
+    )
+
+
 def build_report(
     results: dict[str, Any],
     base: dict[str, dict[str, SensorResult]],
@@ -632,6 +688,21 @@ def build_report(
                 for cls in CLASSES
             ],
         )
+
+    rep.heading("Sensitivity to each position's positioning error")
+    rep.paragraph(
+        "First-order change of each gyro estimate per arcsec of positioning error at one "
+        "position (the others exact), about "
+        + sensitivity_axes_text(sc["positioning_model"])
+        + ", in the parameter's unit per arcsec; max abs = largest magnitude, at = where it "
+        "occurs. "
+        "This is the linear map behind the 'pos. sigma' column above "
+        "(CalibrationDesign.positioning_sensitivity, checked against finite differences)."
+    )
+    for n in names:
+        block = results["baseline"][n]["positioning_sensitivity"]
+        rep.paragraph(sensitivity_sentence(n, block, sc["positioning_error_arcsec"]))
+        rep.table(*sensitivity_table(block, sc["positioning_model"]))
 
     rep.heading("Beyond P1: designed position sets")
     for sensors, d in results["design"].items():

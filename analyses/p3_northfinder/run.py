@@ -24,9 +24,16 @@ from matplotlib.figure import Figure
 from inserr.errors import InputError
 from inserr.northfinder import Instrument, Pose, SensorGrade, simulate
 from inserr.northfinder_bounds import bias_instability_psd, crlb
-from inserr.northfinder_filter import period_measurements, run_filter, solve, wrap_angle
+from inserr.northfinder_filter import (
+    hemisphere_name,
+    hemisphere_sign,
+    period_measurements,
+    run_filter,
+    solve,
+    wrap_angle,
+)
 from inserr.northfinder_plots import heading_history_figure, latitude_history_figure
-from inserr.northfinder_study import monte_carlo
+from inserr.northfinder_study import EQUATORIAL_BAND, POLAR_BAND, monte_carlo
 from inserr.progress import progress
 from inserr.report import Report
 from inserr.units import DEG, DEG_PER_HOUR, DEG_PER_S, DEG_PER_SQRT_HOUR, MIL, parse_quantity
@@ -38,12 +45,14 @@ HERE = Path(__file__).resolve().parent
 
 
 def _q(table: dict, key: str, kind: str, section: str) -> float:
+    """One quantity ``section.key`` of the scenario, in SI (InputError if missing)."""
     if key not in table:
         raise InputError(f"{section}.{key}", "missing from the scenario file")
     return parse_quantity(table[key], kind, f"{section}.{key}")
 
 
 def _qlist(table: dict, key: str, kind: str, section: str) -> list[float]:
+    """A non-empty list of quantities ``section.key``, in SI."""
     values = table.get(key)
     if not isinstance(values, list) or not values:
         raise InputError(f"{section}.{key}", "must be a non-empty list of quantities")
@@ -51,7 +60,22 @@ def _qlist(table: dict, key: str, kind: str, section: str) -> list[float]:
 
 
 def load_scenario(path: Path, quick: bool) -> dict:
-    """Parse the scenario file into SI values and library objects."""
+    """Parse the scenario file into SI values and library objects.
+
+    Parameters
+    ----------
+    path : Path
+        ``scenario.toml`` (every quantity with its unit).
+    quick : bool
+        Use the ``quick_*`` entries (reduced runs and grids).
+
+    Returns
+    -------
+    dict
+        ``pose``, ``instrument``, ``grade`` (library objects, SI), ``hemisphere`` (the
+        declared one, +1 or -1), run counts, ``seed``, ``requirement`` (rad), ``time``
+        (s) and the sweep grids (rad, rad/s, s, or plain factors).
+    """
     data = tomllib.loads(path.read_text(encoding="utf-8"))
     s, i, g = data["site"], data["instrument"], data["grade"]
     pose = Pose(
@@ -87,8 +111,12 @@ def load_scenario(path: Path, quick: bool) -> dict:
         data["small_angle"],
     )
     prefix = "quick_" if quick else ""
+    if "hemisphere" not in s:
+        raise InputError("site.hemisphere", "missing: declare 'north' or 'south' as a user would")
     return {
         "pose": pose,
+        # What the user tells the estimator, never derived from the simulated latitude.
+        "hemisphere": hemisphere_sign(s["hemisphere"]),
         "instrument": instrument,
         "grade": grade,
         "runs": int(mc[prefix + "runs"]),
@@ -116,7 +144,19 @@ def load_scenario(path: Path, quick: bool) -> dict:
 
 
 def scaled_gyro(grade: SensorGrade, factor: float) -> SensorGrade:
-    """Every gyro error (ARW, bias, bias instability) times ``factor``."""
+    """A grade with every gyro error (ARW, bias, bias instability) times ``factor``.
+
+    Parameters
+    ----------
+    grade : SensorGrade
+        Reference grade (SI).
+    factor : float
+        Dimensionless scale factor, > 0.
+
+    Returns
+    -------
+    SensorGrade
+    """
     return grade.replace(
         gyro_arw=grade.gyro_arw * factor,
         gyro_bias=grade.gyro_bias * factor,
@@ -128,6 +168,20 @@ def scaled_gyro(grade: SensorGrade, factor: float) -> SensorGrade:
 
 
 def time_history(sc: dict) -> tuple[dict, object]:
+    """Heading and latitude error vs time at the base case.
+
+    Parameters
+    ----------
+    sc : dict
+        Scenario from :func:`load_scenario`.
+
+    Returns
+    -------
+    results : dict
+        Summary, figures at the requirement time and histories (s, mil, deg).
+    result : MonteCarloResult
+        For the figures.
+    """
     res = monte_carlo(
         sc["pose"],
         sc["instrument"],
@@ -135,6 +189,7 @@ def time_history(sc: dict) -> tuple[dict, object]:
         sc["history_duration"],
         n_runs=sc["runs"],
         seed=sc["seed"],
+        hemisphere=sc["hemisphere"],
         desc="time history",
     )
     k3 = int(np.argmin(np.abs(res.times - sc["time"])))
@@ -159,6 +214,19 @@ def time_history(sc: dict) -> tuple[dict, object]:
 
 
 def rate_sweep(sc: dict) -> dict:
+    """Monte Carlo heading sigma and bounds vs table rate, default and stress grades.
+
+    Parameters
+    ----------
+    sc : dict
+        Scenario from :func:`load_scenario`.
+
+    Returns
+    -------
+    dict
+        ``rows``: rate (deg/s), Monte Carlo sigma, CRLB and CRLB with bias
+        instability (mil) for each grade.
+    """
     stress = sc["grade"].replace(
         gyro_bias_instability=sc["stress_bi"], gyro_correlation_time=sc["stress_tau"]
     )
@@ -168,7 +236,14 @@ def rate_sweep(sc: dict) -> dict:
         row = {"rate_deg_s": rate / DEG_PER_S}
         for label, grade in (("default", sc["grade"]), ("stress", stress)):
             res = monte_carlo(
-                sc["pose"], ins, grade, sc["time"], n_runs=sc["runs"], seed=sc["seed"], desc=label
+                sc["pose"],
+                ins,
+                grade,
+                sc["time"],
+                n_runs=sc["runs"],
+                seed=sc["seed"],
+                hemisphere=sc["hemisphere"],
+                desc=label,
             )
             row[f"{label}_mc_sigma_mil"] = float(res.heading_sigma()[-1] / MIL)
             row[f"{label}_crlb_mil"] = float(res.bound.heading[-1] / MIL)
@@ -178,6 +253,7 @@ def rate_sweep(sc: dict) -> dict:
 
 
 def _bound_at(pose, ins, grade, duration) -> float:
+    """Heading bound with bias instability at the end of ``duration``, rad."""
     return float(crlb(pose, ins, grade, duration, bias_instability=True).heading[-1])
 
 
@@ -186,6 +262,20 @@ def required_factor(pose, ins, grade, duration, target) -> float:
 
     The bound is monotonic in the factor (it scales every gyro noise), so bisection on
     log(factor) converges; 40 halvings give 1e-12 relative.
+
+    Parameters
+    ----------
+    pose, ins, grade
+        Base case (SI).
+    duration : float
+        s.
+    target : float
+        Heading 1 sigma to meet, rad.
+
+    Returns
+    -------
+    float
+        Scale factor on every gyro error (dimensionless).
     """
     lo, hi = 1e-3, 1e3
     for _ in range(40):
@@ -198,12 +288,105 @@ def required_factor(pose, ins, grade, duration, target) -> float:
     return lo
 
 
+def required_factor_mc(
+    pose: Pose,
+    ins: Instrument,
+    grade: SensorGrade,
+    duration: float,
+    target: float,
+    *,
+    start: float,
+    n_runs: int,
+    seed: int,
+    hemisphere: int,
+    tolerance: float = 1e-3,
+    max_iterations: int = 5,
+) -> dict:
+    """Gyro-error scale factor at which the filter's Monte Carlo sigma meets ``target``.
+
+    With the seed fixed, every gyro noise sample scales with the factor and the
+    filter's gain does not depend on it (R and Q scale together, the prior is
+    diffuse), so the Monte Carlo heading sigma is proportional to the factor up to
+    the small accelerometer share and the second-order terms of the heading solution.
+    The fixed-point step ``f <- f * target / sigma(f)`` therefore lands in one step
+    and the next evaluation confirms it.
+
+    Parameters
+    ----------
+    pose, ins, grade
+        Base case (SI).
+    duration : float
+        s.
+    target : float
+        Heading 1 sigma to meet, rad.
+    start : float
+        First factor to try (the bound's answer).
+    n_runs, seed, hemisphere
+        Monte Carlo runs, seed and the declared hemisphere (+1 or -1).
+    tolerance : float
+        Relative tolerance on sigma / target.
+    max_iterations : int
+        Monte Carlo evaluations at most.
+
+    Returns
+    -------
+    dict
+        ``factor``; ``mc_sigma_mil`` and ``crlb_mil`` at it; ``iterations``: the
+        (factor, sigma in mil) pairs evaluated.
+    """
+    f, steps = start, []
+    for _ in range(max_iterations):
+        res = monte_carlo(
+            pose,
+            ins,
+            scaled_gyro(grade, f),
+            duration,
+            n_runs=n_runs,
+            seed=seed,
+            hemisphere=hemisphere,
+            desc=f"x{f:.4g}",
+        )
+        sigma = float(res.heading_sigma()[-1])
+        steps.append({"factor": f, "mc_sigma_mil": sigma / MIL})
+        if abs(sigma / target - 1.0) <= tolerance:
+            break
+        f *= target / sigma
+    return {
+        "factor": f,
+        "mc_sigma_mil": sigma / MIL,
+        "crlb_mil": float(res.bound.heading[-1] / MIL),
+        "iterations": steps,
+    }
+
+
 def grade_sweep(sc: dict) -> dict:
+    """Heading sigma vs gyro grade, and the grade that meets the requirement.
+
+    The required grade is solved on the filter's Monte Carlo
+    (:func:`required_factor_mc`, ``check_runs`` runs, starting from the bound's
+    answer of :func:`required_factor`) and verified with independent seeds; the
+    bound's answer is kept beside it.
+
+    Parameters
+    ----------
+    sc : dict
+        Scenario from :func:`load_scenario`.
+
+    Returns
+    -------
+    dict
+        ``rows`` (ARW deg/sqrt(h), bias instability deg/h, sigma/bias/bound in mil),
+        ``required`` (``crlb``, ``monte_carlo`` and ``verification`` answers) and
+        ``required_by_latitude``.
+    """
     pose, ins, grade, t = sc["pose"], sc["instrument"], sc["grade"], sc["time"]
+    hemi, target, n_check = sc["hemisphere"], sc["requirement"], sc["check_runs"]
     rows = []
     for f in progress(sc["factors"], total=len(sc["factors"]), desc="grade sweep"):
         g = scaled_gyro(grade, f)
-        res = monte_carlo(pose, ins, g, t, n_runs=sc["runs"], seed=sc["seed"], desc=f"x{f:g}")
+        res = monte_carlo(
+            pose, ins, g, t, n_runs=sc["runs"], seed=sc["seed"], hemisphere=hemi, desc=f"x{f:g}"
+        )
         rows.append(
             {
                 "factor": f,
@@ -214,39 +397,109 @@ def grade_sweep(sc: dict) -> dict:
                 "crlb_mil": float(res.bound.heading[-1] / MIL),
             }
         )
-    need = required_factor(pose, ins, grade, t, sc["requirement"])
-    g_need = scaled_gyro(grade, need)
+
+    def _grade_of(f: float) -> dict:
+        g = scaled_gyro(grade, f)
+        return {
+            "factor": f,
+            "arw_deg_sqrt_h": g.gyro_arw / DEG_PER_SQRT_HOUR,
+            "bias_deg_h": g.gyro_bias / DEG_PER_HOUR,
+            "bias_instability_deg_h": g.gyro_bias_instability / DEG_PER_HOUR,
+        }
+
+    f_bound = required_factor(pose, ins, grade, t, target)
+    solved = required_factor_mc(
+        pose,
+        ins,
+        grade,
+        t,
+        target,
+        start=f_bound,
+        n_runs=n_check,
+        seed=sc["seed"] + 1,
+        hemisphere=hemi,
+    )
+    at_bound = solved["iterations"][0]
     check = monte_carlo(
-        pose, ins, g_need, t, n_runs=sc["check_runs"], seed=sc["seed"] + 1, desc="required grade"
+        pose,
+        ins,
+        scaled_gyro(grade, solved["factor"]),
+        t,
+        n_runs=n_check,
+        seed=sc["seed"] + 2,
+        hemisphere=hemi,
+        desc="verification",
     )
     by_lat = []
-    for lat in sc["grade_latitudes"]:
+    for lat in progress(sc["grade_latitudes"], total=len(sc["grade_latitudes"]), desc="latitudes"):
         p = replace(pose, lat=lat)
-        f = required_factor(p, ins, grade, t, sc["requirement"])
+        f_b = required_factor(p, ins, grade, t, target)
+        mc = required_factor_mc(
+            p,
+            ins,
+            grade,
+            t,
+            target,
+            start=f_b,
+            n_runs=n_check,
+            seed=sc["seed"] + 1,
+            hemisphere=1 if lat > 0 else -1,  # declared as a user there would
+        )
         by_lat.append(
             {
                 "latitude_deg": lat / DEG,
-                "factor": f,
-                "arw_deg_sqrt_h": grade.gyro_arw * f / DEG_PER_SQRT_HOUR,
-                "bias_instability_deg_h": grade.gyro_bias_instability * f / DEG_PER_HOUR,
+                "crlb_factor": f_b,
+                "crlb_arw_deg_sqrt_h": grade.gyro_arw * f_b / DEG_PER_SQRT_HOUR,
+                "factor": mc["factor"],
+                "arw_deg_sqrt_h": grade.gyro_arw * mc["factor"] / DEG_PER_SQRT_HOUR,
+                "bias_instability_deg_h": grade.gyro_bias_instability * mc["factor"] / DEG_PER_HOUR,
+                "mc_sigma_at_crlb_grade_mil": mc["iterations"][0]["mc_sigma_mil"],
+                "mc_sigma_mil": mc["mc_sigma_mil"],
+                "crlb_mil": mc["crlb_mil"],
             }
         )
     return {
         "rows": rows,
         "required": {
-            "factor": need,
-            "arw_deg_sqrt_h": g_need.gyro_arw / DEG_PER_SQRT_HOUR,
-            "bias_deg_h": g_need.gyro_bias / DEG_PER_HOUR,
-            "bias_instability_deg_h": g_need.gyro_bias_instability / DEG_PER_HOUR,
-            "mc_sigma_mil": float(check.heading_sigma()[-1] / MIL),
-            "crlb_mil": float(check.bound.heading[-1] / MIL),
-            "runs": check.n_runs,
+            "runs": n_check,
+            "sampling_spread": 1.0 / math.sqrt(2.0 * (n_check - 1)),
+            "crlb": {
+                **_grade_of(f_bound),
+                "crlb_mil": target / MIL,
+                "mc_sigma_mil": at_bound["mc_sigma_mil"],
+            },
+            "monte_carlo": {
+                **_grade_of(solved["factor"]),
+                "mc_sigma_mil": solved["mc_sigma_mil"],
+                "crlb_mil": solved["crlb_mil"],
+                "seed": sc["seed"] + 1,
+                "iterations": solved["iterations"],
+            },
+            "verification": {
+                "seed": sc["seed"] + 2,
+                "mc_sigma_mil": float(check.heading_sigma()[-1] / MIL),
+                "mc_bias_mil": float(check.heading_bias()[-1] / MIL),
+                "crlb_mil": float(check.bound.heading[-1] / MIL),
+            },
         },
         "required_by_latitude": by_lat,
     }
 
 
 def bias_instability_table(sc: dict) -> dict:
+    """Inflation of the heading bound by the gyro bias instability vs correlation time.
+
+    Parameters
+    ----------
+    sc : dict
+        Scenario from :func:`load_scenario`.
+
+    Returns
+    -------
+    dict
+        ``rows``: tau (s), Gauss-Markov PSD / ARW^2 at the table frequency and the
+        sigma inflation (dimensionless); ``worst_case_inflation`` over tau.
+    """
     g, w = sc["grade"], sc["instrument"].table_rate
     rows = []
     for tau in sc["bi_taus"]:
@@ -263,6 +516,23 @@ def bias_instability_table(sc: dict) -> dict:
 
 
 def heading_latitude_map(sc: dict) -> dict:
+    """Bounds over heading x latitude and Monte Carlo cells beside them.
+
+    Each Monte Carlo cell declares the hemisphere of its own latitude, as a user
+    standing there would.
+
+    Parameters
+    ----------
+    sc : dict
+        Scenario from :func:`load_scenario`.
+
+    Returns
+    -------
+    dict
+        Grids (deg), heading bounds (mil) with latitude unknown and known, latitude
+        bound (deg), and ``mc_cells`` (sigma, bias and bound in mil, ratio, ambiguous
+        fraction, and the warnings of :func:`inserr.northfinder_study.diagnose`).
+    """
     pose, ins, grade, t = sc["pose"], sc["instrument"], sc["grade"], sc["time"]
     headings = np.arange(0.0, 2 * math.pi - 1e-9, sc["map_heading_step"])
     lim, step = sc["map_lat_limit"], sc["map_lat_step"]
@@ -288,6 +558,7 @@ def heading_latitude_map(sc: dict) -> dict:
             t,
             n_runs=sc["mc_map_runs"],
             seed=sc["seed"] + 1000 + k,
+            hemisphere=1 if lat > 0 else -1,  # declared as a user there would
             desc="cell",
         )
         sigma, bias = res.heading_sigma()[-1], res.heading_bias()[-1]
@@ -301,6 +572,8 @@ def heading_latitude_map(sc: dict) -> dict:
                 "ratio": float(sigma / res.bound.heading[-1]),
                 "bias_in_sigma": float(abs(bias) / sigma),
                 "ambiguous_fraction": float(res.ambiguous[-1].mean()),
+                "hemisphere_declared": hemisphere_name(res.hemisphere),
+                "warnings": list(res.warnings),
             }
         )
     return {
@@ -315,7 +588,19 @@ def heading_latitude_map(sc: dict) -> dict:
 
 
 def small_angle_table(sc: dict) -> dict:
-    """Noise-free errors of P3's small-angle mounting model and of the exact inversion."""
+    """Noise-free errors of P3's small-angle mounting model and of the exact inversion.
+
+    Parameters
+    ----------
+    sc : dict
+        Scenario from :func:`load_scenario`.
+
+    Returns
+    -------
+    dict
+        ``rows``: mounting angle (deg) and the heading (mil), latitude (deg), pitch
+        and roll (microrad) errors of both models.
+    """
     pose, grade = sc["pose"], sc["grade"]
     base = replace(sc["instrument"], sample_rate=10.0)  # noise-free: increments are exact
     cases = [("gyro_tilt", v) for v in sc["gyro_tilts"]]
@@ -328,7 +613,7 @@ def small_angle_table(sc: dict) -> dict:
         x = run_filter(period_measurements(data, ins), ins, grade).x[-1, :, 0]
         row = {"mounting": name, "angle_deg": value / DEG}
         for model in ("p3", "exact"):
-            s = solve(x, ins, model=model)
+            s = solve(x, ins, hemisphere=sc["hemisphere"], model=model)
             row[f"{model}_heading_mil"] = float(wrap_angle(s.heading - pose.heading) / MIL)
             row[f"{model}_latitude_deg"] = float((s.lat - pose.lat) / DEG)
             row[f"{model}_pitch_urad"] = float((s.pitch - pose.pitch) * 1e6)
@@ -341,6 +626,19 @@ def small_angle_table(sc: dict) -> dict:
 
 
 def rate_figure(r: dict, req_mil: float) -> Figure:
+    """Heading 1 sigma vs table rate (log-log), Monte Carlo beside the bounds.
+
+    Parameters
+    ----------
+    r : dict
+        :func:`rate_sweep` results.
+    req_mil : float
+        Requirement, mil.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig = Figure(figsize=(7.5, 4.2))
     ax = fig.add_subplot()
     rates = [row["rate_deg_s"] for row in r["rows"]]
@@ -367,13 +665,32 @@ def rate_figure(r: dict, req_mil: float) -> Figure:
 
 
 def grade_figure(g: dict, req_mil: float) -> Figure:
+    """Heading 1 sigma vs gyro ARW (log-log), with both answers for the required grade.
+
+    Parameters
+    ----------
+    g : dict
+        :func:`grade_sweep` results.
+    req_mil : float
+        Requirement, mil.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig = Figure(figsize=(7.5, 4.2))
     ax = fig.add_subplot()
     arw = [row["arw_deg_sqrt_h"] for row in g["rows"]]
     ax.loglog(arw, [row["mc_sigma_mil"] for row in g["rows"]], "o-", label="Monte Carlo 1σ")
     ax.loglog(arw, [row["crlb_mil"] for row in g["rows"]], "k--", label="CRLB")
     ax.axhline(req_mil, color="r", lw=0.8, label="requirement")
-    ax.axvline(g["required"]["arw_deg_sqrt_h"], color="g", lw=0.8, label="required ARW")
+    need = g["required"]
+    ax.axvline(
+        need["monte_carlo"]["arw_deg_sqrt_h"], color="g", lw=0.8, label="required ARW (Monte Carlo)"
+    )
+    ax.axvline(
+        need["crlb"]["arw_deg_sqrt_h"], color="g", ls=":", lw=0.8, label="required ARW (bound)"
+    )
     ax.set_xlabel("gyro ARW [deg/√h] (bias and bias instability scaled alike)")
     ax.set_ylabel("heading 1σ at the requirement time [mil]")
     ax.grid(True, which="both", alpha=0.3)
@@ -382,6 +699,17 @@ def grade_figure(g: dict, req_mil: float) -> Figure:
 
 
 def map_figure(m: dict) -> Figure:
+    """Heading and latitude bounds over heading x latitude (log10 colour maps).
+
+    Parameters
+    ----------
+    m : dict
+        :func:`heading_latitude_map` results.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig = Figure(figsize=(11, 4.4), layout="constrained")
     h, lat = np.asarray(m["headings_deg"]), np.asarray(m["latitudes_deg"])
     for k, (key, label) in enumerate(
@@ -400,6 +728,17 @@ def map_figure(m: dict) -> Figure:
 
 
 def mc_map_figure(m: dict) -> Figure:
+    """Monte Carlo sigma / CRLB and bias (mil) over the Monte Carlo cells.
+
+    Parameters
+    ----------
+    m : dict
+        :func:`heading_latitude_map` results.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig = Figure(figsize=(11, 4.4), layout="constrained")
     cells = m["mc_cells"]
     hs = sorted({c["heading_deg"] for c in cells})
@@ -424,6 +763,23 @@ def mc_map_figure(m: dict) -> Figure:
 
 
 def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report:
+    """The Markdown/HTML report; every number in it comes from ``results``.
+
+    Parameters
+    ----------
+    sc : dict
+        Scenario from :func:`load_scenario`.
+    results : dict
+        The studies' results (what ``results.json`` holds).
+    history_result : MonteCarloResult
+        The time-history study, for its figures.
+    quick : bool
+        Mark the report as a quick run.
+
+    Returns
+    -------
+    inserr.report.Report
+    """
     th, rs, gs = results["time_history"], results["rate_sweep"], results["grade_sweep"]
     bi, mp, sa = results["bias_instability"], results["map"], results["small_angle"]
     req_mil, t_min = sc["requirement"] / MIL, sc["time"] / 60.0
@@ -439,26 +795,84 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
         f"period; gyro ARW {sc['grade'].gyro_arw / DEG_PER_SQRT_HOUR:g} °/√h, bias "
         f"{sc['grade'].gyro_bias / DEG_PER_HOUR:g} °/h, bias instability "
         f"{sc['grade'].gyro_bias_instability / DEG_PER_HOUR:g} °/h (Gauss-Markov, τ = "
-        f"{sc['grade'].gyro_correlation_time:g} s); latitude unknown to the estimator; "
+        f"{sc['grade'].gyro_correlation_time:g} s); latitude unknown to the estimator, "
+        f"which is told only the hemisphere ({hemisphere_name(sc['hemisphere'])}, declared "
+        "in the scenario as a user would); "
         f"{sc['runs']} Monte Carlo runs, seed {sc['seed']}. Generated by "
         "`analyses/p3_northfinder/run.py` from `scenario.toml`; every number below comes "
         "from `results.json`."
     )
-    rep.heading("Answer: grade for 0.5 mil (1σ) in 3 minutes")
+    rep.heading(f"Answer: grade for {req_mil:g} mil (1σ) in {t_min:g} minutes")
+    mc, bd, ver = need["monte_carlo"], need["crlb"], need["verification"]
+    spread = need["sampling_spread"]
+    gap = bd["factor"] / mc["factor"] - 1.0
     rep.paragraph(
-        f"To reach {req_mil:g} mil (1σ) in {t_min:g} min at the base case, every gyro error "
-        f"must be scaled by {need['factor']:.3g} from the default grade: **ARW ≤ "
-        f"{need['arw_deg_sqrt_h']:.3g} °/√h** with bias instability ≤ "
-        f"{need['bias_instability_deg_h']:.3g} °/h (the constant bias, here "
-        f"{need['bias_deg_h']:.3g} °/h, is removed by the rotation and does not matter). "
-        f"A Monte Carlo at that grade ({need['runs']} runs) gives {need['mc_sigma_mil']:.3f} mil "
-        f"against a bound of {need['crlb_mil']:.3f} mil. The heading bound scales as "
-        "ARW / (Ω cos L · √T), so the required ARW depends on latitude:"
+        f"Solved on the filter's Monte Carlo ({need['runs']} runs, seed {mc['seed']}): to reach "
+        f"{req_mil:g} mil (1σ) in {t_min:g} min at the base case, every gyro error must be "
+        f"scaled by {mc['factor']:.3g} from the default grade: **ARW ≤ "
+        f"{mc['arw_deg_sqrt_h']:.3g} °/√h** with bias instability ≤ "
+        f"{mc['bias_instability_deg_h']:.3g} °/h (the constant bias, here "
+        f"{mc['bias_deg_h']:.3g} °/h, is removed by the rotation and does not matter). "
+        f"At that grade the Monte Carlo gives {mc['mc_sigma_mil']:.3f} mil (bound "
+        f"{mc['crlb_mil']:.3f} mil); with {need['runs']} runs a Monte Carlo σ is known to "
+        f"±{100 * spread:.1f} % (1σ), and so is the required ARW."
+    )
+    n_ver = need["runs"]
+    pooled = math.sqrt((mc["mc_sigma_mil"] ** 2 + ver["mc_sigma_mil"] ** 2) / 2.0)
+    diff = ver["mc_sigma_mil"] / mc["mc_sigma_mil"] - 1.0
+    rep.paragraph(
+        f"Verification with independent seeds (seed {ver['seed']}, {n_ver} runs) at the same "
+        f"grade: {ver['mc_sigma_mil']:.3f} mil, bias {ver['mc_bias_mil']:.3f} mil. The two "
+        f"estimates differ by {100 * diff:+.1f} %, {abs(diff) / (math.sqrt(2) * spread):.1f} "
+        f"times the {100 * math.sqrt(2) * spread:.1f} % spread of such a difference. Pooled "
+        f"({2 * n_ver} runs) the filter gives {pooled:.3f} mil at that grade (σ/CRLB "
+        f"{pooled / mc['crlb_mil']:.3f}, ±{100 * spread / math.sqrt(2):.1f} %), "
+        + (
+            f"{100 * (1 - pooled / req_mil):.1f} % inside the requirement: by the pooled "
+            "estimate the answer above errs on the safe side."
+            if pooled <= req_mil
+            else f"{100 * (pooled / req_mil - 1):.1f} % over the requirement: by the pooled "
+            "estimate the ARW should be that much lower still."
+        )
+    )
+    rep.paragraph(
+        f"The Cramér-Rao bound alone would allow **ARW ≤ {bd['arw_deg_sqrt_h']:.3g} °/√h** "
+        f"(factor {bd['factor']:.3g}, where the bound with bias instability is exactly "
+        f"{bd['crlb_mil']:.3g} mil), but the filter's Monte Carlo at that grade gives "
+        f"{bd['mc_sigma_mil']:.3f} mil (σ / that bound "
+        f"{bd['mc_sigma_mil'] / bd['crlb_mil']:.3f}), hence the answer above, "
+        f"{100 * gap:.1f} % stricter. "
+        + (
+            f"That gap is {abs(gap) / spread:.1f} sampling sigmas: within what {need['runs']} "
+            "runs resolve, the filter attains the bound (see also the time history and the "
+            "grade sweep below); the Monte Carlo answer is the one to quote because it is "
+            "what this filter was seen to deliver."
+            if abs(gap) < 3 * spread
+            else f"That gap is {abs(gap) / spread:.1f} sampling sigmas: the filter does not "
+            "attain the bound here."
+        )
+        + " The heading bound scales as ARW / (Ω cos L · √T), so the required ARW depends on "
+        "latitude (each row solved the same way, with the same seeds, so the rows share "
+        "their sampling error; each site declares its own hemisphere):"
     )
     rep.table(
-        ["latitude [deg]", "required ARW [deg/√h]", "bias instability [deg/h]", "factor"],
         [
-            [r["latitude_deg"], r["arw_deg_sqrt_h"], r["bias_instability_deg_h"], r["factor"]]
+            "latitude [deg]",
+            "required ARW, Monte Carlo [deg/√h]",
+            "MC σ there [mil]",
+            "required ARW, bound [deg/√h]",
+            "MC σ at the bound's grade [mil]",
+            "bias instability, Monte Carlo answer [deg/h]",
+        ],
+        [
+            [
+                r["latitude_deg"],
+                r["arw_deg_sqrt_h"],
+                r["mc_sigma_mil"],
+                r["crlb_arw_deg_sqrt_h"],
+                r["mc_sigma_at_crlb_grade_mil"],
+                r["bias_instability_deg_h"],
+            ]
             for r in gs["required_by_latitude"]
         ],
     )
@@ -481,6 +895,11 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
         + ("not reached within the record." if conv is None else f"{conv:g} s.")
         + " The filter is efficient: it follows the bound from the first table turn on, "
         "because the measurement model is linear in the states and exact."
+    )
+    rep.paragraph(
+        "Warnings `inserr northfind` would print for this case: "
+        + ("; ".join(summ["warnings"]) if summ["warnings"] else "none")
+        + "."
     )
     rep.figure(heading_history_figure(history_result), "heading_vs_time", "Heading error vs time")
     rep.figure(
@@ -600,6 +1019,25 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
         rep.paragraph(
             text + " There, give the latitude (`--latitude-known`) or level the table better."
         )
+
+    def _tags(group: list[dict]) -> str:
+        counts: dict[str, int] = {}
+        for c in group:
+            for w in c["warnings"]:
+                tag = w.split(":", 1)[0]
+                counts[tag] = counts.get(tag, 0) + 1
+        return ", ".join(f"{tag} ({n})" for tag, n in sorted(counts.items())) or "none"
+
+    rep.paragraph(
+        "Every cell declares the hemisphere of its own latitude, as a user there would; "
+        "the estimator is never told the latitude. The warnings `inserr northfind` "
+        "would print (`inserr.northfinder_study.diagnose`; bands from the tutorial, "
+        f"§8: polar |L| > {POLAR_BAND / DEG:.1f}°, equatorial |L| or |E| < "
+        f"{EQUATORIAL_BAND / DEG:.2f}° with E the Earth-rate elevation above the table "
+        "plane, latitude unresolved where |E| < 3 latitude bounds), counted by kind: "
+        f"in the {len(regular)} cells with |L| ≥ 10°: {_tags(regular)}; in the {len(band)} "
+        f"cells with |L| < 10°: {_tags(band)}."
+    )
     rep.figure(map_figure(mp), "map_bound", "Cramér-Rao bounds over heading × latitude")
     rep.figure(
         mc_map_figure(mp),
@@ -641,6 +1079,18 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run every study and write the report directory.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Command-line arguments (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status: 0, or 2 for an invalid scenario file.
+    """
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="reduced run into out/")
     ap.add_argument("--scenario", default=str(HERE / "scenario.toml"))
@@ -668,9 +1118,10 @@ def main(argv: list[str] | None = None) -> int:
     os.replace(path / "report.md", path / "REPORT.md")
     need = results["grade_sweep"]["required"]
     print(
-        f"wrote {path} in {results['elapsed_s']:.0f} s; "
-        f"required ARW {need['arw_deg_sqrt_h']:.3g} deg/sqrt(h) for "
-        f"{sc['requirement'] / MIL:g} mil in {sc['time'] / 60:g} min"
+        f"wrote {path} in {results['elapsed_s']:.0f} s; required ARW "
+        f"{need['monte_carlo']['arw_deg_sqrt_h']:.3g} deg/sqrt(h) (Monte Carlo; bound: "
+        f"{need['crlb']['arw_deg_sqrt_h']:.3g}) for {sc['requirement'] / MIL:g} mil in "
+        f"{sc['time'] / 60:g} min"
     )
     return 0
 

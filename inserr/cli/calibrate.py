@@ -8,9 +8,10 @@ Examples::
     inserr calibrate --design --design-sizes 4,6 --top 5
 
 Output units (human and JSON): scale factors ppm, misalignments arcsec, gyro biases
-deg/h, accelerometer biases micro-g, times s. Every flag that takes a quantity accepts
-a bare number in the unit given in its help, or the number with a unit written
-(``--arw "0.03 deg/sqrt(h)"``).
+deg/h, accelerometer biases micro-g, times s; sensitivities to the table's positioning
+error in those units per arcsec (``positioning_sensitivity``). Every flag that takes a
+quantity accepts a bare number in the unit given in its help, or the number with a unit
+written (``--arw "0.03 deg/sqrt(h)"``).
 """
 
 from __future__ import annotations
@@ -50,7 +51,18 @@ HELP = "Multi-position gyro/accelerometer calibration."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Register the flags of ``inserr calibrate``."""
+    """Register the flags of ``inserr calibrate``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser. Quantities are stored as text and parsed (with
+        units: deg, s, arcsec, deg/sqrt(h), ug/sqrt(Hz), deg/s, Hz) in :func:`run`.
+
+    Returns
+    -------
+    None
+    """
     # Quantities are read as text and parsed in run(), so bad values raise InputError
     # (one line, exit 2) instead of argparse's usage dump.
     parser.add_argument(
@@ -241,7 +253,24 @@ def _design(args: argparse.Namespace, site: Site, rate: float, settle: float, ar
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run ``inserr calibrate``; returns the exit status."""
+    """Run ``inserr calibrate``: Monte Carlo study of one position set, or ``--design``.
+
+    Prints the summary (human text, or JSON under ``--json``: ``positions``,
+    ``total_time_s``, ``rank``, ``condition_number``, ``parameters``,
+    ``positioning_sensitivity`` and the same blocks under ``accel``; engineering units,
+    see the module) and writes the ``--out`` report directory if asked.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed flags of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit status, 0 on success (bad input raises :class:`InputError`, which the
+        CLI reports with status 2).
+    """
     lat = require_latitude(parse_quantity(args.lat, "angle", "--lat", default_unit="deg"), "--lat")
     site = Site(lat)
     rate = _positive(args.rate, "angular_rate", "--rate", "deg/s")
@@ -262,9 +291,12 @@ def run(args: argparse.Namespace) -> int:
 
     from inserr.calibration_report import (
         PARAMETER_HEADER,
+        SENSITIVITY_HEADER,
         build_report,
         calibration_summary,
         parameter_rows,
+        sensitivity_axes_text,
+        sensitivity_rows,
     )
 
     summary, results = calibration_summary(pset, site, p1_truth(arw, vrw), config)
@@ -299,6 +331,13 @@ def run(args: argparse.Namespace) -> int:
             "(dwell-weighted design, columns scaled to unit norm)",
             *block["identifiability_messages"],
             format_table(PARAMETER_HEADER, parameter_rows(block)),
+            "",
+            f"{sensor}: largest first-order sensitivity to one position's positioning error, "
+            f"over all positions and about {sensitivity_axes_text(config.positioning_model)}; "
+            "parameter unit per arcsec:",
+            format_table(
+                SENSITIVITY_HEADER, sensitivity_rows(block["positioning_sensitivity"]), "{:.3g}"
+            ),
         ]
     if args.out:
         lines += ["", f"report written to {args.out}"]

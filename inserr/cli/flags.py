@@ -157,7 +157,18 @@ def scenario_from_args(args: argparse.Namespace) -> Scenario:
     """Scenario from the optional file argument overlaid with the flags."""
     over = flags_to_dict(args)
     path = getattr(args, "scenario", None)
-    if path:
-        base = load_scenario(path)
+    base = load_scenario(path) if path else None
+    try:
+        if base is None:
+            return scenario_from_dict(over)
         return scenario_from_dict(merge(base.raw, over), base.base_dir) if over else base
-    return scenario_from_dict(over)
+    except InputError as exc:
+        # Name the flag the user typed, not the scenario key it was translated to.
+        given = {
+            key: f"--{name}"
+            for name, (key, _, _) in FLAGS.items()
+            if getattr(args, name.replace("-", "_"), None) is not None
+        }
+        if exc.field in given:
+            raise InputError(f"{given[exc.field]} ({exc.field})", exc.problem, exc.fix) from None
+        raise

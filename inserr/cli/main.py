@@ -30,6 +30,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+#: Commands whose ``--out`` is not a report directory replaced as a whole.
+_OWN_OUT_CHECK = frozenset({"sweep"})
+
+
 def available_commands() -> dict[str, tuple[str, str]]:
     """The registered commands whose modules are installed: name -> (module, help)."""
     import importlib.util
@@ -73,10 +77,23 @@ def main(argv: list[str] | None = None) -> int:
 
         set_quiet(True)
     try:
+        # A report directory is replaced as a whole: refuse a dangerous --out before
+        # any work. (A sweep's --out is a resumable store with its own checks.)
+        if getattr(args, "out", None) and args.command not in _OWN_OUT_CHECK:
+            from inserr.report import check_report_dir
+
+            check_report_dir(args.out)
         return int(module.run(args) or 0)
     except InputError as exc:
         print(f"inserr {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        again = " (a sweep resumes if rerun with the same --out)" if args.command == "sweep" else ""
+        print(
+            f"inserr {args.command}: interrupted; no partial report was kept{again}",
+            file=sys.stderr,
+        )
+        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

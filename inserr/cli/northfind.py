@@ -6,10 +6,14 @@ Example::
         --runs 50 --seed 1 --json
 
 Every value flag takes a bare number in its documented unit or a number with a
-unit (``--arw "0.001 deg/sqrt(h)"``, ``--minutes "180 s"``). The estimator is never
-given the latitude unless ``--latitude-known``; it is told the hemisphere, by
-default that of ``--lat`` (see ``docs/tutorials/northfinding.md`` for why one bit is
-unavoidable).
+unit (``--arw "0.001 deg/sqrt(h)"``, ``--minutes "180 s"``). ``--lat`` is the
+simulated truth and is never given to the estimator unless ``--latitude-known``. The
+estimator is told only the hemisphere the user declares with ``--hemisphere`` (default
+north), never the one of ``--lat``: one gyro and one accelerometer cannot tell the
+hemispheres apart (see ``docs/tutorials/northfinding.md``). The JSON echoes the
+declaration (``hemisphere_declared``) and lists ``warnings`` for the polar and
+equatorial bands, an unresolved latitude, the mirror root, and a Monte Carlo sigma
+outside 0.8-1.2 times the bound.
 """
 
 from __future__ import annotations
@@ -74,7 +78,17 @@ _FIELD_TO_FLAG = {
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the ``northfind`` flags to ``parser``."""
+    """Add the ``northfind`` flags to a parser.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The ``northfind`` sub-command parser; modified in place.
+
+    Returns
+    -------
+    None
+    """
     for flag, (_, unit, default, help_) in _VALUE_FLAGS.items():
         required = default is None
         parser.add_argument(
@@ -87,13 +101,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--runs", default="50", help="Monte Carlo runs (default 50)")
     parser.add_argument("--seed", default="0", help="random seed, integer >= 0 (default 0)")
     parser.add_argument(
-        "--latitude-known", action="store_true", help="give the estimator the true latitude"
+        "--latitude-known",
+        action="store_true",
+        help="give the estimator the true latitude (--hemisphere is then not used)",
     )
     parser.add_argument(
         "--hemisphere",
         choices=("north", "south"),
-        default=None,
-        help="hemisphere told to the estimator (default: that of --lat)",
+        default="north",
+        help="hemisphere the user declares to the estimator (default north; the "
+        "instrument cannot tell the hemispheres apart, and it is not taken from --lat)",
     )
     parser.add_argument("--out", default=None, metavar="DIR", help="write a report directory")
     add_json_flag(parser)
@@ -105,7 +122,11 @@ def _with_flag_names(exc: InputError) -> InputError:
 
 
 def _setup(args: argparse.Namespace):
-    """Parse and validate every input; raises InputError before any work is done."""
+    """Parse and validate every input; raises InputError before any work is done.
+
+    Returns pose, instrument, grade (SI), duration (s), runs, seed and the declared
+    hemisphere (+1 north, -1 south).
+    """
     from inserr.northfinder import Instrument, Pose, SensorGrade, n_filter_periods
 
     v = {
@@ -150,15 +171,24 @@ def _setup(args: argparse.Namespace):
         n_filter_periods(instrument, v["--minutes"])
     except InputError as exc:
         raise _with_flag_names(exc) from None
-    if args.hemisphere is None:
-        hemisphere = 1 if pose.lat >= 0 else -1
-    else:
-        hemisphere = 1 if args.hemisphere == "north" else -1
+    # The user's declaration, never the hemisphere of the simulated --lat.
+    hemisphere = 1 if args.hemisphere == "north" else -1
     return pose, instrument, grade, v["--minutes"], runs, seed, hemisphere
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the Monte Carlo study, print the summary and optionally write a report."""
+    """Run the Monte Carlo study, print the summary and optionally write a report.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``northfind`` flags (see :func:`add_arguments`).
+
+    Returns
+    -------
+    int
+        Exit status, 0 (bad input raises InputError, which the CLI turns into 2).
+    """
     pose, instrument, grade, duration, runs, seed, hemisphere = _setup(args)
     from inserr.northfinder_study import monte_carlo
 
@@ -175,7 +205,6 @@ def run(args: argparse.Namespace) -> int:
     summary = {
         **result.summary(),
         "latitude_known": bool(args.latitude_known),
-        "hemisphere": "north" if hemisphere > 0 else "south",
         "seed": seed,
     }
     if args.out is not None:
@@ -199,7 +228,7 @@ def _human(s: dict) -> str:
     lines = [
         f"North finder, {s['runs']} runs of {s['duration_s']:g} s "
         f"(latitude {'known' if s['latitude_known'] else 'unknown'}, "
-        f"{s['hemisphere']}ern hemisphere)",
+        f"{s['hemisphere_declared']}ern hemisphere declared)",
         "",
         format_table(["quantity", "Monte Carlo", "CRLB"], rows),
         "",
@@ -207,6 +236,8 @@ def _human(s: dict) -> str:
         "convergence (|error| <= 0.5 mil in >= 68 % of runs from then on): "
         + ("not reached within the run" if conv is None else f"{conv:g} s"),
     ]
+    if s["warnings"]:
+        lines += ["", "warnings:"] + [f"  - {w}" for w in s["warnings"]]
     if s.get("report"):
         lines.append(f"report: {s['report']}")
     return "\n".join(lines)
@@ -225,11 +256,18 @@ def _write_report(out: str, result, summary: dict, args: argparse.Namespace) -> 
         f"Site latitude {args.lat} deg, heading {args.heading} deg, pitch {args.pitch} deg, "
         f"roll {args.roll} deg; table {args.rate} deg/s; {summary['runs']} runs of "
         f"{summary['duration_s']:g} s, seed {summary['seed']}. Latitude "
-        f"{'given to' if summary['latitude_known'] else 'not given to'} the estimator."
+        f"{'given to' if summary['latitude_known'] else 'not given to'} the estimator; "
+        f"hemisphere declared: {summary['hemisphere_declared']}."
     )
+    for warning in summary["warnings"]:
+        rep.paragraph(f"**Warning** — {warning}.")
     rep.table(
         ["quantity", "value"],
-        [[k, "n/a" if v is None else v] for k, v in summary.items() if k != "report"],
+        [
+            [k, "n/a" if v is None else v]
+            for k, v in summary.items()
+            if k not in ("report", "warnings")
+        ],
     )
     rep.figure(heading_history_figure(result), "heading_error", "Heading error vs time")
     rep.figure(convergence_figure(result), "convergence", "Runs within 0.5 mil vs time")

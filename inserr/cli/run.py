@@ -16,13 +16,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from inserr.report import check_report_dir
     from inserr.scenario import load_scenario
     from inserr.summary import build_report, metrics_table, run_scheme
 
     scen = load_scenario(args.scenario)
+    out = args.out or f"{Path(args.scenario).stem}_report"
+    check_report_dir(out)
     names = (scen.scheme_name,) + tuple(n for n in scen.compare if n != scen.scheme_name)
     runs = [run_scheme(scen, n) for n in progress(names, total=len(names), desc="schemes")]
-    out = args.out or f"{Path(args.scenario).stem}_report"
     path = build_report(scen, runs).write(out)
     header, rows = metrics_table(runs)
     emit(

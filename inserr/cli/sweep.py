@@ -24,6 +24,13 @@ MAX_ROWS = 40
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the arguments of ``inserr sweep`` to its parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The ``sweep`` sub-command's parser.
+    """
     add_scenario_flags(p)
     p.add_argument(
         "--param",
@@ -54,21 +61,38 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default=None,
         metavar="DIR",
         help="output directory; rerunning with the same DIR skips finished points "
-        "(default sweep-<scenario name>)",
+        "(default sweep-<scenario file name>, lowercase letters, digits, - and _ only)",
     )
     p.add_argument("--no-plots", action="store_true", help="do not draw the summary plots")
     add_json_flag(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.sweep import build_grid
+    """Run ``inserr sweep``: validate the grid, connect, run the points, print a summary.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments (:func:`add_arguments`).
+
+    Returns
+    -------
+    int
+        Exit status: 0, or 1 when some point failed (a rerun may succeed).
+
+    Raises
+    ------
+    InputError
+        Bad scenario or grid, unreachable cluster: before any output is written.
+    """
+    from inserr.sweep import build_grid, default_out_dir
     from inserr.sweep_run import open_engine, run_sweep
 
     base = scenario_from_args(args)
     grid = build_grid(base, args.param)
     # Connect (or fail) before the output directory exists.
     engine = open_engine(args.scheduler, args.workers)
-    out = args.out or f"sweep-{base.name}"
+    out = args.out or default_out_dir(base, getattr(args, "scenario", None))
     res = run_sweep(grid, out, scheduler=engine, plots=not args.no_plots)
     rows = [dict(zip(res.header, r, strict=True)) for r in res.rows]
     result = {
