@@ -14,11 +14,11 @@ warm-up run. Two scenarios:
   two-position, 72 h; its linear run is heavier (1 s sub-steps of the swing).
 
 The last line, ``linear_vs_nonlinear_speedup: <ratio>``, is the ratio for the
-``done-when`` scenario (about 2000 here, above the 1000 target); the line before it
-gives P0 experiment 1's (about 100: the swinging base makes the linear run ~20x
-heavier while the nonlinear cost per hour is unchanged, so the 1000 target is met
-only on a static base). Timings share the machine with whatever else runs on it;
-each linear time is the best of three.
+``done-when`` scenario (1500 to 2000 on a 2-core machine, above the 1000 target);
+the line before it gives P0 experiment 1's (about 110 to 130: the swinging base
+makes the linear run ~10x heavier while the nonlinear cost per hour is unchanged,
+so the 1000 target is met only on a static base). Timings share the machine with
+whatever else runs on it; each linear time is the best of three.
 
 Usage: ``python benchmarks/reference.py [--slice-hours 1] [--rate 100]``
 """

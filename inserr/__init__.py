@@ -5,4 +5,4 @@ conventions. Heavy modules (python-control, matplotlib) are imported only by the
 modules that need them.
 """
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

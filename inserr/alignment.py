@@ -437,10 +437,11 @@ def run_alignment(
     if model_t is model:
         x_true = m0_inv @ true0
     else:
-        k_imu = np.concatenate([imu.gyro_error_matrix.ravel(), imu.accel_error_matrix.ravel()])
-        x_true = np.linalg.solve(
-            model_t.imu_transform(timeline.c_sn[0]), np.concatenate([m0_inv @ true0, k_imu])
-        )
+        # m0_inv has already resolved the biases in n; only K is still IMU-frame:
+        # K^n = C_s^n K^s C_n^s, i.e. vec_row(K^n) = kron(C_s^n, C_s^n) vec_row(K^s).
+        c0 = np.asarray(timeline.c_sn[0])
+        k_n = [np.kron(c0, c0) @ k.ravel() for k in (imu.gyro_error_matrix, imu.accel_error_matrix)]
+        x_true = np.concatenate([m0_inv @ true0, *k_n])
     attitudes = timeline.attitude_at(t_meas)
     t_all = np.concatenate([[0.0], t_meas])
     est = np.zeros((len(t_all), n))

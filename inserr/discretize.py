@@ -5,26 +5,28 @@ angular velocity ``w`` (IMU relative to n, resolved in n) and its duration, so
 :class:`Discretizer` caches ``Phi`` and ``Qd`` under the key ``(w, dt)``; a whole
 72 h indexing run typically needs three or four distinct discretizations.
 
-* ``Phi`` of stops, of long turns and of every segment of a model without rotating
-  states comes from python-control: ``control.sample_system(sys, dt, "zoh")`` of the
-  segment's :class:`control.StateSpace` (the augmented model is homogeneous, so the
-  ZOH state matrix is exactly ``expm(A dt)``).
+* ``Phi`` of whole stops and long turns, and of every segment of a model without
+  rotating states, comes from python-control: ``control.sample_system(sys, dt,
+  "zoh")`` of the segment's :class:`control.StateSpace` (the augmented model is
+  homogeneous, so the ZOH state matrix is exactly ``expm(A dt)``).
 * ``Qd`` comes from Van Loan's method (:func:`filterpy.common.van_loan_discretization`),
   because python-control has no process-noise discretization.
-* Short *turning* sub-steps (``0 < |w| dt <= MAX_TURN_PER_STEP``) bypass
-  python-control by design. Continuous vehicle motion cut into sub-steps yields
-  many *distinct* ``(w, dt)`` keys (tens of thousands), each a cache miss, and one
-  ``sample_system`` call (a StateSpace build plus a full n x n ``expm``) per
-  sub-step would dominate the run. These sub-steps are instead discretized
-  together, vectorised, from the block structure of A (closed-form rotation of the
-  exo states, cached navigation block, Gauss-Legendre quadrature of the one
-  coupling integral), which is exact to roundoff for the sub-step sizes used and
-  some tens of times faster per sub-step. ``tests/test_model.py``
-  (``test_control_discretization_equals_expm_of_augmented_matrix``) compares this
-  structured path with ``scipy.linalg.expm(A(w) dt)`` of the full augmented-state
-  matrix :meth:`~inserr.model.ErrorModel.matrix`, not with python-control; the
-  python-control path is compared in the same test with ``scipy.linalg.expm`` of
-  A bordered by a zero input row and column.
+* Short sub-steps bypass python-control by design: turning sub-steps and pieces
+  of stops shorter than ``MAX_STRUCTURED_STOP`` (a stop cut by output times), as
+  long as ``(|w| + lambda_max) dt <= MAX_TURN_PER_STEP`` with ``lambda_max`` the
+  fastest rate of the model at rest (Schuler, Earth, or ``1/tau`` of a short
+  Gauss-Markov bias). Continuous vehicle motion cut into sub-steps, and stops whose
+  ends fall between output times, yield many *distinct* ``(w, dt)`` keys (tens of
+  thousands), each a cache miss, and one ``sample_system`` call (a StateSpace build
+  plus a full n x n ``expm``) per sub-step would dominate the run. These sub-steps
+  are instead discretized together, vectorised, from the block structure of A
+  (closed-form rotation of the exo states, cached navigation block, Gauss-Legendre
+  quadrature of the one coupling integral), which is exact to roundoff for the
+  sub-step sizes allowed and some tens of times faster per sub-step.
+  ``tests/test_model.py`` compares this structured path with ``scipy.linalg.expm``
+  of the full augmented-state matrix :meth:`~inserr.model.ErrorModel.matrix`, not
+  with python-control; the python-control path is compared in the same test with
+  ``scipy.linalg.expm`` of A bordered by a zero input row and column.
 """
 
 from __future__ import annotations
@@ -45,8 +47,8 @@ DT_QUANTUM = 1e-9
 MAX_CACHE = 8192
 #: Largest rotation per step (rad) for the structured (quadrature) path.
 MAX_TURN_PER_STEP = 0.5
-#: Stop pieces shorter than this (s) also take the structured path: the integrand then
-#: varies only at the Schuler and Earth rates (|F| h < 0.1), far inside the rule's range.
+#: Stop pieces shorter than this (s) also take the structured path (if the model's
+#: fastest rate allows, see ``Discretizer._use_structured``).
 MAX_STRUCTURED_STOP = 60.0
 
 
@@ -71,6 +73,9 @@ class Discretizer:
         self._nav_nodes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         # Shared across threads (discretizer_for): one lock guards the caches.
         self._lock = threading.RLock()
+        # Fastest rate of the model at rest (Schuler, Earth, 1/tau of a Gauss-Markov
+        # bias), 1/s: it bounds the quadrature error of the structured path.
+        self._fastest = float(np.max(np.abs(np.linalg.eigvals(model.matrix(np.zeros(3))))))
 
     def key(self, omega_n: np.ndarray, dt: float) -> tuple:
         """Cache key of a segment: quantized ``w`` and ``dt`` as integers.
@@ -102,9 +107,9 @@ class Discretizer:
     def transition(self, omega_n: np.ndarray, dt: float) -> np.ndarray:
         """Transition matrix ``Phi = expm(A(w) dt)`` of one segment, cached.
 
-        Stops, long turns and non-rotating models go through python-control
-        ``sample_system`` (ZOH); short turning sub-steps through the structured
-        evaluation (see the module docstring).
+        Whole stops, long turns and non-rotating models go through python-control
+        ``sample_system`` (ZOH); short sub-steps (turning, or a piece of a stop cut
+        by an output time) through the structured evaluation (module docstring).
 
         Parameters
         ----------
@@ -187,10 +192,11 @@ class Discretizer:
     def transitions(self, omegas: np.ndarray, dts: np.ndarray) -> list[np.ndarray]:
         """Transition matrices ``Phi`` of many segments at once.
 
-        Cache hits are served from the cache. Stops and long turns (the segments of
-        an indexing scheme) go through python-control (:meth:`transition`); short
-        turning sub-steps (continuous motion) through :meth:`_structured`, which
-        evaluates the same matrix exponential from its block structure, vectorised.
+        Cache hits are served from the cache. Whole stops and long turns (the
+        segments of an indexing scheme) go through python-control
+        (:meth:`transition`); short sub-steps (continuous motion, pieces of stops cut
+        by output times) through :meth:`_structured`, which evaluates the same matrix
+        exponential from its block structure, vectorised.
 
         Parameters
         ----------
@@ -234,19 +240,22 @@ class Discretizer:
         return [self._phi[k] if k in self._phi else self._transition(*self._unkey(k)) for k in keys]
 
     def _use_structured(self, key: tuple) -> bool:
-        """Short sub-steps take the structured path; stops and long turns python-control.
+        """Short sub-steps take the structured path; whole stops and long turns python-control.
 
-        Short means a turning sub-step of at most :data:`MAX_TURN_PER_STEP` rad, or a
-        piece of a stop shorter than :data:`MAX_STRUCTURED_STOP` s: where a stop ends
-        between two output times, its remainder has a length that differs from cycle
-        to cycle (e.g. the Ts + 2/w stops of the modified four-position scheme), and
-        one python-control call per remainder used to dominate the run time.
+        Short means ``(|w| + lambda_max) dt <= MAX_TURN_PER_STEP`` (``lambda_max`` the
+        fastest rate of the model at rest), and for a stop (``w = 0``) also shorter
+        than :data:`MAX_STRUCTURED_STOP` s: where a stop ends between two output times,
+        its remainder has a length that differs from cycle to cycle (e.g. the
+        Ts + 2/w stops of the modified four-position scheme), and one python-control
+        call per remainder used to dominate the run time.
         """
         w, h = self._unkey(key)
-        turn = float(np.linalg.norm(w)) * h
-        if not self.model.layout.rotating:
+        if not self.model.layout.rotating or h <= 0.0:
             return False
-        return 0.0 < turn <= MAX_TURN_PER_STEP or (turn == 0.0 and 0.0 < h < MAX_STRUCTURED_STOP)
+        rate = float(np.linalg.norm(w))
+        if (rate + self._fastest) * h > MAX_TURN_PER_STEP:
+            return False
+        return rate > 0.0 or h < MAX_STRUCTURED_STOP
 
     def _structured(self, omegas: np.ndarray, h: float) -> np.ndarray:
         """``expm(A(w) h)`` for many ``w`` from the block structure of A (vectorised).

@@ -236,7 +236,10 @@ class MonteCarloResult:
             "ambiguous_fraction": float(self.ambiguous[-1].mean()),
             "runs": self.n_runs,
             "duration_s": float(self.times[-1]),
-            "hemisphere_declared": hemisphere_name(self.hemisphere),
+            # With the latitude given, no hemisphere is declared (none is used).
+            "hemisphere_declared": None
+            if self.latitude_known
+            else hemisphere_name(self.hemisphere),
             "warnings": list(self.warnings),
         }
 

@@ -321,7 +321,7 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
                 f"{duration / 3600:g} h at {dt:g} s is {n:.3g} samples, more than the "
                 f"{MAX_SAMPLES:.3g} kept in memory",
                 f"use a coarser output.{key} (flag --{flag}) of at least "
-                f"{duration / MAX_SAMPLES:.3g} s, or a shorter duration",
+                f"{math.ceil(duration / MAX_SAMPLES * 1000.0) / 1000.0:g} s, or a shorter duration",
             )
     if out["vertical"] not in ("clamped", "free"):
         raise InputError(

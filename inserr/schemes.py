@@ -407,7 +407,9 @@ class FlexibleTwoPosition:
             hit = (np.sign(expr) != np.sign(prev)) & sign_ok
         first = np.flatnonzero(hit)
         fallback = not len(first)
-        n = first[0] + 1 if len(first) else _best_sample(np.abs(expr), sign_ok) + 1
+        # A fallback never takes a whole revolution (it would only return to the start).
+        short = w * j / self.f < 2 * math.pi - 1e-9
+        n = first[0] + 1 if len(first) else _best_sample(np.abs(expr[short]), sign_ok[short]) + 1
         b.rotate(
             "outer",
             direction * w * n / self.f,

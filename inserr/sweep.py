@@ -42,7 +42,8 @@ A point's identity (:attr:`Point.id`) is a hash of the base scenario, the
 point's changes, the inserr version and the bytes of any file the point's
 scenario reads (the ``motion.file`` heading history), so a point keeps its
 identity when the grid grows or is reordered (that is what makes resuming safe),
-and is computed again when the code or its input data change. Each point gets its own seed,
+and is computed again when the inserr version (bumped with every release that changes
+results) or its input data change. Each point gets its own seed,
 derived from the base seed and its changes (unless ``scenario.seed`` is swept),
 so no random state is shared between points and the numbers do not depend on
 which worker ran which point. The seed does not depend on the inserr version or

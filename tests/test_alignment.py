@@ -381,3 +381,23 @@ def test_cli_align_truth_only_errors_move_the_run_not_the_sigmas(capsys):
     assert kick > 5.0
     assert main(base + ["--gyro-misalignment", "1,2,3"]) == 2
     assert "--gyro-misalignment" in capsys.readouterr().err
+
+
+def test_truth_with_unmodelled_k_starts_from_the_given_biases_at_any_attitude():
+    """K must not disturb the rest of the truth: at a tilted, turned start the true
+    biases (IMU frame) are the ones given, and a vanishing K changes nothing."""
+    site = Site(34.0 * DEG)
+    base = Base(site, Motion(heading=90.0 * DEG, pitch=1.0 * DEG, roll=-2.0 * DEG), 6 * DEG, 60.0)
+    tl = alignment_timeline(base, "none", 30.0)
+    gyro = np.array([0.01, 0.02, 0.03]) * DEG_PER_HOUR
+    accel = np.array([10.0, 20.0, 30.0]) * MICRO_G
+    plain = run_alignment(site, tl, ImuErrors(gyro_bias=gyro, accel_bias=accel))
+    tiny = run_alignment(
+        site,
+        tl,
+        ImuErrors(gyro_bias=gyro, accel_bias=accel, gyro_misalignment=np.full(6, 1e-15)),
+    )
+    for res in (plain, tiny):
+        np.testing.assert_allclose(res.truth[-1, 9:12], gyro, rtol=1e-9)
+        np.testing.assert_allclose(res.truth[-1, 12:15], accel, rtol=1e-9)
+    np.testing.assert_allclose(tiny.truth, plain.truth, rtol=0, atol=1e-9)

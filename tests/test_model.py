@@ -81,6 +81,27 @@ def test_control_discretization_equals_expm_of_augmented_matrix():
     assert not d._use_structured(d.key(zero, 300.0))  # a whole stop: python-control
 
 
+def test_structured_path_respects_a_short_correlation_time():
+    """A 1 s Gauss-Markov bias makes the integrand decay fast: a 59 s stop piece must not
+    take the quadrature (it gave a 6e-2 relative error); a 0.2 s one may, exactly."""
+    model = ErrorModel(
+        Site.from_degrees(34.0),
+        Layout(bias_instability=True),
+        gyro_correlation_time=1.0,
+        accel_correlation_time=1.0,
+    )
+    d = Discretizer(model)
+    zero = np.zeros(3)
+    for h, structured in ((59.0, False), (0.2, True)):
+        assert d._use_structured(d.key(zero, h)) is structured
+        ref = sl.expm(model.matrix(zero) * h)
+        got = d.transitions(zero[None], np.array([h]))[0]
+        # Two scaling-and-squaring expm of a stiff matrix (1/tau = 1 against Schuler
+        # 1e-3) agree to ~2e-13 of the largest entry; the quadrature, when wrongly
+        # used, was off by 6e-2.
+        assert np.allclose(got, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+
+
 def test_van_loan_noise_equals_quadrature():
     model = ErrorModel(
         Site.from_degrees(34.0),

@@ -223,7 +223,9 @@ def test_figures_always_belong_to_the_current_results(tmp_path):
     from inserr.sweep_run import LocalEngine, run_sweep
 
     out = tmp_path / "out"
-    out.mkdir()
+    # A sweep directory exists first (a new sweep refuses a directory of other files);
+    # then the user drops files into it.
+    assert main(["sweep", *BASE, *GRID, "--workers", "1", "--out", str(out), "--no-plots"]) == 0
     foreign = {  # the user's files, some named like inserr's figures
         "sweep_mine.png": _png(),
         "sweep_max_horizontal_error_nmi.png.bak": _png(),
@@ -553,3 +555,27 @@ def test_lost_worker_fails_its_points_only(tmp_path):
     rerun = subprocess.run([*cmd, "--json"], env=env, capture_output=True, text=True)
     assert rerun.returncode == 0, rerun.stderr
     assert json.loads(rerun.stdout)["computed"] == len(lost)
+
+
+def test_sweep_out_never_mixes_with_a_users_files(tmp_path, monkeypatch, capsys):
+    """A sweep refuses a file, the working directory and a directory of other files,
+    before any work; an earlier sweep's directory is accepted (that is resuming)."""
+    from inserr.cli.main import main
+    from inserr.sweep_store import check_sweep_dir
+
+    mine = tmp_path / "notes"
+    mine.mkdir()
+    (mine / "results.csv").write_text("my own table\n")
+    argv = ["sweep", "--hours", "1", "--param", "stop=60,120"]
+    assert main(argv + ["--out", str(mine)]) == 2
+    assert "not an inserr sweep" in capsys.readouterr().err
+    assert (mine / "results.csv").read_text() == "my own table\n"
+    (tmp_path / "afile").write_text("x")
+    assert main(argv + ["--out", str(tmp_path / "afile")]) == 2
+    assert "not a directory" in capsys.readouterr().err
+    monkeypatch.chdir(mine)
+    assert main(argv + ["--out", "."]) == 2
+    assert "working directory" in capsys.readouterr().err
+    earlier = tmp_path / "earlier"
+    (earlier / "points").mkdir(parents=True)
+    assert check_sweep_dir(earlier) == earlier.resolve()

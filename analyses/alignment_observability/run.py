@@ -50,7 +50,7 @@ from inserr.imu import ImuErrors
 from inserr.model import ErrorModel, Layout
 from inserr.motion import YawSwing
 from inserr.observability import alignment10, analyze, full_timeline
-from inserr.report import dumps, replace_dir
+from inserr.report import MARKER, check_report_dir, dumps, replace_dir
 from inserr.scenario import scenario_from_dict
 from inserr.units import (
     ARCMIN,
@@ -330,7 +330,9 @@ def _setup_lines(res: dict) -> list[str]:
         f"- Static floors for this budget and prior (table at its zero): φE "
         f"{fl['phi_e_arcsec']:.3g}″, φN {fl['phi_n_arcsec']:.3g}″ (∇/g), heading "
         f"{fl['phi_u_arcmin']:.3g}′ (ε_E/(Ω cos L)), each combined with the attitude prior "
-        "as 1/σ² = 1/σ_prior² + 1/floor² (a 0.5 % effect here).",
+        "as 1/σ² = 1/σ_prior² + 1/floor² (with a diffuse prior: φE "
+        f"{res['static_floors_diffuse']['phi_e_arcsec']:.3g}″, heading "
+        f"{res['static_floors_diffuse']['phi_u_arcmin']:.3g}′).",
         "",
     ]
 
@@ -444,8 +446,9 @@ def _filter_lines(res: dict, names: list[str]) -> list[str]:
         "formally separable). *σ reduction* is what the 10-minute filter achieved from its "
         f"prior: reduced at least {WELL:g}× (strongly), less than "
         f"{(1 - 1 / NOT) * 100:.0f} % (not), or between (partly). A state can be strongly "
-        "reduced yet not separately observable — static heading falls from its 60′ prior to "
-        "the ε_E/(Ω cos L) floor and stops there, held by the unobservable combination.",
+        "reduced yet not separately observable — static heading falls from its "
+        f"{res['settings']['initial_heading_arcmin']:g}′ prior to the ε_E/(Ω cos L) floor and "
+        "stops there, held by the unobservable combination.",
         "",
     ]
     for n in names:
@@ -791,6 +794,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"run.py: error: {exc}", file=sys.stderr)
         return 2
     out_dir = Path(args.out) if args.out else HERE / ("out" if args.quick else "results")
+    try:
+        check_report_dir(out_dir, "--out")  # before any work: never replace a user's directory
+    except InputError as exc:
+        print(f"run.py: error: {exc}", file=sys.stderr)
+        return 2
     duration = cfg["quick_duration"] if args.quick else scen.duration
     stops = cfg["quick_stops"] if args.quick else cfg["stops"]
     names = list(scen.compare) or [scen.scheme_name]
@@ -828,6 +836,7 @@ def main(argv: list[str] | None = None) -> int:
     floors = static_floors(
         site, imu.gyro_bias, imu.accel_bias, motion.attitude(0.0)[0], prior.attitude
     )
+    diffuse = static_floors(site, imu.gyro_bias, imu.accel_bias, motion.attitude(0.0)[0])
 
     static = run_schemes(base, names, duration, imu, prior, settings)
     static_bias_only = run_schemes(base, names, duration, imu_bias_only, prior, settings)
@@ -881,6 +890,11 @@ def main(argv: list[str] | None = None) -> int:
             "phi_n_arcsec": floors["phi_n"] / ARCSEC,
             "phi_u_arcmin": floors["phi_u"] / ARCMIN,
         },
+        "static_floors_diffuse": {
+            "phi_e_arcsec": diffuse["phi_e"] / ARCSEC,
+            "phi_n_arcsec": diffuse["phi_n"] / ARCSEC,
+            "phi_u_arcmin": diffuse["phi_u"] / ARCMIN,
+        },
         "classic": classic(site, motion.heading),
         "observability": observability(site, base, names, duration, settings.vertical),
         "static": summarize(static, base, duration, floors, prior),
@@ -900,6 +914,7 @@ def main(argv: list[str] | None = None) -> int:
         save(stop_figure(sweep_runs), tmp / "stop_sweep.png")
         (tmp / "results.json").write_text(dumps(results) + "\n", encoding="utf-8")
         (tmp / "REPORT.md").write_text(report_md(results), encoding="utf-8")
+        (tmp / MARKER).write_text("written by inserr; replaced as a whole on rewrite\n")
         replace_dir(tmp, out_dir)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)

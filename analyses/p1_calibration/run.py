@@ -14,10 +14,7 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
-import shutil
 import sys
-import tempfile
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -55,7 +52,7 @@ from inserr.errors import InputError, require_latitude
 from inserr.imu import ImuErrors
 from inserr.mechanism import BUILTIN_SETS, PositionSet, builtin_set, load_position_set
 from inserr.progress import progress
-from inserr.report import Report, replace_dir
+from inserr.report import Report, check_report_dir
 from inserr.units import ARCSEC, DEG_PER_SQRT_HOUR, parse_quantity
 
 HERE = Path(__file__).resolve().parent
@@ -751,15 +748,7 @@ def build_report(
 
 def write(rep: Report, out: Path) -> Path:
     """Write the report directory atomically, with the Markdown as REPORT.md."""
-    out = out.resolve()
-    tmp_parent = Path(tempfile.mkdtemp(prefix=f".{out.name}.build-", dir=out.parent))
-    try:
-        staged = rep.write(tmp_parent / "staged")
-        os.replace(staged / "report.md", staged / "REPORT.md")
-        replace_dir(staged, out)
-    finally:
-        shutil.rmtree(tmp_parent, ignore_errors=True)
-    return out
+    return rep.write(out, markdown_name="REPORT.md")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -769,6 +758,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default=str(HERE / "results"), help="output directory")
     args = parser.parse_args(argv)
     try:
+        check_report_dir(args.out, "--out")  # before any work: never replace a user's directory
         sc = load_scenario(Path(args.scenario))
         rep, results = run_study(sc, args.quick)
     except InputError as exc:

@@ -30,7 +30,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
-#: Commands whose ``--out`` is not a report directory replaced as a whole.
+#: Commands whose ``--out`` is not a report directory replaced as a whole (a sweep's
+#: directory is a resumable store: :func:`inserr.sweep_store.check_sweep_dir`).
 _OWN_OUT_CHECK = frozenset({"sweep"})
 
 
@@ -79,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         # A report directory is replaced as a whole: refuse a dangerous --out before
         # any work. (A sweep's --out is a resumable store with its own checks.)
-        if getattr(args, "out", None) and args.command not in _OWN_OUT_CHECK:
+        if getattr(args, "out", None) is not None and args.command not in _OWN_OUT_CHECK:
             from inserr.report import check_report_dir
 
             check_report_dir(args.out)
@@ -88,11 +89,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"inserr {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        again = " (a sweep resumes if rerun with the same --out)" if args.command == "sweep" else ""
-        print(
-            f"inserr {args.command}: interrupted; no partial report was kept{again}",
-            file=sys.stderr,
+        what = (
+            "finished points are kept; rerun with the same --out to resume"
+            if args.command == "sweep"
+            else "no partial report was kept"
         )
+        print(f"inserr {args.command}: interrupted; {what}", file=sys.stderr)
         return 130
 
 

@@ -227,8 +227,11 @@ def _human(s: dict) -> str:
     ]
     lines = [
         f"North finder, {s['runs']} runs of {s['duration_s']:g} s "
-        f"(latitude {'known' if s['latitude_known'] else 'unknown'}, "
-        f"{s['hemisphere_declared']}ern hemisphere declared)",
+        + (
+            "(latitude known)"
+            if s["latitude_known"]
+            else f"(latitude unknown, {s['hemisphere_declared']}ern hemisphere declared)"
+        ),
         "",
         format_table(["quantity", "Monte Carlo", "CRLB"], rows),
         "",
@@ -256,8 +259,12 @@ def _write_report(out: str, result, summary: dict, args: argparse.Namespace) -> 
         f"Site latitude {args.lat} deg, heading {args.heading} deg, pitch {args.pitch} deg, "
         f"roll {args.roll} deg; table {args.rate} deg/s; {summary['runs']} runs of "
         f"{summary['duration_s']:g} s, seed {summary['seed']}. Latitude "
-        f"{'given to' if summary['latitude_known'] else 'not given to'} the estimator; "
-        f"hemisphere declared: {summary['hemisphere_declared']}."
+        + (
+            "given to the estimator."
+            if summary["latitude_known"]
+            else "not given to the estimator; hemisphere declared: "
+            f"{summary['hemisphere_declared']}."
+        )
     )
     for warning in summary["warnings"]:
         rep.paragraph(f"**Warning** — {warning}.")

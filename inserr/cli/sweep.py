@@ -87,12 +87,14 @@ def run(args: argparse.Namespace) -> int:
     """
     from inserr.sweep import build_grid, default_out_dir
     from inserr.sweep_run import open_engine, run_sweep
+    from inserr.sweep_store import check_sweep_dir
 
     base = scenario_from_args(args)
     grid = build_grid(base, args.param)
+    out = args.out or default_out_dir(base, getattr(args, "scenario", None))
+    check_sweep_dir(out)
     # Connect (or fail) before the output directory exists.
     engine = open_engine(args.scheduler, args.workers)
-    out = args.out or default_out_dir(base, getattr(args, "scenario", None))
     res = run_sweep(grid, out, scheduler=engine, plots=not args.no_plots)
     rows = [dict(zip(res.header, r, strict=True)) for r in res.rows]
     result = {
