@@ -16,6 +16,7 @@ import math
 import os
 import shutil
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -216,19 +217,31 @@ def is_report_dir(path: Path) -> bool:
     )
 
 
-def check_report_dir(out_dir: str | os.PathLike, field: str = "--out") -> Path:
-    """Check, before any work, that a report can be written to ``out_dir``.
+def check_output_dir(
+    out_dir: str | os.PathLike,
+    field: str,
+    is_ours: Callable[[Path], bool],
+    what: str,
+    fix: str,
+) -> Path:
+    """Check, before any work, that inserr may write into ``out_dir``.
 
-    :meth:`Report.write` replaces the target directory as a whole, so the target must
-    be new, empty, or an earlier inserr report: never the working directory, one of
-    its parents, a file, or a directory holding anything else.
+    The target must be new, empty, or one inserr wrote before (``is_ours``): never
+    the working directory or one of its parents, a file, a directory holding
+    anything else, or a path through a file or an unwritable parent.
 
     Parameters
     ----------
     out_dir : str or path
-        The report directory the user asked for.
+        The output directory the user asked for.
     field : str
         Name of the flag or key reported in the error message.
+    is_ours : callable
+        ``is_ours(path)`` is True for a non-empty directory inserr may reuse.
+    what : str
+        What the directory is meant to be, for the message (e.g. "an inserr report").
+    fix : str
+        How to fix a refused directory.
 
     Returns
     -------
@@ -247,19 +260,13 @@ def check_report_dir(out_dir: str | os.PathLike, field: str = "--out") -> Path:
     if target == cwd or target in cwd.parents:
         raise InputError(
             field,
-            f"{out_dir!s} is the working directory or one of its parents, which a report "
-            "would replace as a whole",
+            f"{out_dir!s} is the working directory or one of its parents",
             "name a new directory, e.g. --out my_report",
         )
     if target.exists() and not target.is_dir():
         raise InputError(field, f"{out_dir!s} exists and is not a directory", "name a directory")
-    if target.is_dir() and any(target.iterdir()) and not is_report_dir(target):
-        raise InputError(
-            field,
-            f"{out_dir!s} exists and is not an inserr report directory; writing the report "
-            "would replace its contents",
-            "name a new directory, or remove that one first",
-        )
+    if target.is_dir() and any(target.iterdir()) and not is_ours(target):
+        raise InputError(field, f"{out_dir!s} exists and is not {what} directory", fix)
     for parent in target.parents:
         if parent.exists():
             if not parent.is_dir():
@@ -272,6 +279,33 @@ def check_report_dir(out_dir: str | os.PathLike, field: str = "--out") -> Path:
                 )
             break
     return target
+
+
+def check_report_dir(out_dir: str | os.PathLike, field: str = "--out") -> Path:
+    """Check, before any work, that a report can be written to ``out_dir``.
+
+    :meth:`Report.write` replaces the target directory as a whole, so it must be
+    new, empty or an earlier inserr report (:func:`check_output_dir`).
+
+    Parameters
+    ----------
+    out_dir : str or path
+        The report directory the user asked for.
+    field : str
+        Name of the flag or key reported in the error message.
+
+    Returns
+    -------
+    Path
+        The resolved target.
+    """
+    return check_output_dir(
+        out_dir,
+        field,
+        is_report_dir,
+        "an inserr report",
+        "name a new directory, or remove that one first (a report replaces it as a whole)",
+    )
 
 
 def replace_dir(src: Path, target: Path) -> None:

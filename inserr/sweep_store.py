@@ -54,8 +54,8 @@ def check_sweep_dir(out_dir: str | Path, field: str = "--out") -> Path:
 
     A sweep writes ``sweep.json``, ``results.csv``, ``points/`` and its figures into
     the directory and resumes from what is there, so the directory must be new,
-    empty, or an earlier sweep's (it holds ``sweep.json`` or ``points/``): never a
-    file, the working directory or one of its parents, or a directory of other files.
+    empty, or an earlier sweep's (it holds ``sweep.json`` or ``points/``); see
+    :func:`inserr.report.check_output_dir` for the rest.
 
     Parameters
     ----------
@@ -68,37 +68,16 @@ def check_sweep_dir(out_dir: str | Path, field: str = "--out") -> Path:
     -------
     Path
         The resolved directory.
-
-    Raises
-    ------
-    InputError
-        If the sweep would overwrite or mix with files it did not write.
     """
-    from inserr.errors import InputError
+    from inserr.report import check_output_dir
 
-    target = Path(out_dir).expanduser().resolve()
-    cwd = Path.cwd().resolve()
-    if target == cwd or target in cwd.parents:
-        raise InputError(
-            field,
-            f"{out_dir!s} is the working directory or one of its parents",
-            "name a directory for the sweep, e.g. --out sweep-stops",
-        )
-    if target.exists() and not target.is_dir():
-        raise InputError(field, f"{out_dir!s} exists and is not a directory", "name a directory")
-    ours = (target / "sweep.json").is_file() or (target / "points").is_dir()
-    if target.is_dir() and any(target.iterdir()) and not ours:
-        raise InputError(
-            field,
-            f"{out_dir!s} exists and holds files that are not an inserr sweep",
-            "name a new directory, or the directory of an earlier sweep to resume it",
-        )
-    for parent in target.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise InputError(field, f"{parent} is a file, so {out_dir!s} cannot be created")
-            break
-    return target
+    return check_output_dir(
+        out_dir,
+        field,
+        lambda p: (p / "sweep.json").is_file() or (p / "points").is_dir(),
+        "an inserr sweep",
+        "name a new directory, or the directory of an earlier sweep to resume it",
+    )
 
 
 class SweepStore:

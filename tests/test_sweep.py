@@ -37,6 +37,13 @@ def sweep(tmp: Path, *extra: str, grid: list[str] = GRID) -> int:
     return main(["sweep", *BASE, *grid, "--no-plots", "--out", str(tmp), *extra])
 
 
+def sweep_command(out: Path, param: str, workers: int) -> tuple[list[str], dict[str, str]]:
+    """``inserr sweep`` of 2 h points as a separate process (to kill it), and its env."""
+    cli = [sys.executable, "-m", "inserr.cli.main", "sweep", *BASE, "--hours", "2"]
+    cmd = [*cli, "--param", param, "--workers", str(workers), "--no-plots", "--out", str(out)]
+    return cmd, {**os.environ, "INSERR_NO_PROGRESS": "1"}
+
+
 def rows(out: Path) -> list[dict[str, str]]:
     """The rows of ``out/results.csv`` (all values as text)."""
     with open(out / "results.csv", newline="") as f:
@@ -464,23 +471,7 @@ def test_invalid_combination_is_recorded_and_the_rest_go_on(tmp_path):
 def test_killed_sweep_resumes_without_redoing_finished_points(tmp_path):
     """A killed sweep leaves whole records, and a rerun finishes the rest."""
     out = tmp_path / "out"
-    cmd = [
-        sys.executable,
-        "-m",
-        "inserr.cli.main",
-        "sweep",
-        *BASE,
-        "--hours",
-        "2",
-        "--param",
-        "stop=30,60,90,120,150,180,240,300",
-        "--workers",
-        "1",
-        "--no-plots",
-        "--out",
-        str(out),
-    ]
-    env = {**os.environ, "INSERR_NO_PROGRESS": "1"}
+    cmd, env = sweep_command(out, "stop=30,60,90,120,150,180,240,300", workers=1)
     proc = subprocess.Popen(
         cmd, env=env, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
     )
@@ -522,23 +513,7 @@ def _spawned_workers(parent: int) -> list[int]:
 def test_lost_worker_fails_its_points_only(tmp_path):
     """A killed worker process fails its points only; a rerun retries them."""
     out = tmp_path / "out"
-    cmd = [
-        sys.executable,
-        "-m",
-        "inserr.cli.main",
-        "sweep",
-        *BASE,
-        "--hours",
-        "2",
-        "--param",
-        "stop=20,30,40,50,60,70",
-        "--workers",
-        "2",
-        "--no-plots",
-        "--out",
-        str(out),
-    ]
-    env = {**os.environ, "INSERR_NO_PROGRESS": "1"}
+    cmd, env = sweep_command(out, "stop=20,30,40,50,60,70", workers=2)
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120
     workers: list[int] = []
