@@ -23,16 +23,9 @@ import time
 import numpy as np
 from filterpy.kalman import KalmanFilter
 
-from inserr.discretize import Discretizer
-from inserr.drift import analyze_drift
-from inserr.earth import Site
-from inserr.imu import ImuErrors, InitialErrors
-from inserr.model import ErrorModel, Layout
-from inserr.motion import YawSwing
-from inserr.schedule import build_timeline
-from inserr.schemes import build_scheme
-from inserr.timeline import Timeline
-from inserr.units import (
+from inserr.core.earth import Site
+from inserr.core.imu import ImuErrors, InitialErrors
+from inserr.core.units import (
     ARCSEC,
     DEG,
     DEG_PER_HOUR,
@@ -41,6 +34,13 @@ from inserr.units import (
     MICRO_G_PER_SQRT_HZ,
     PPM,
 )
+from inserr.drift.analysis import analyze_drift
+from inserr.model.discretization import Discretizer
+from inserr.model.psi_model import ErrorModel, Layout
+from inserr.model.timeline import Timeline
+from inserr.schemes.catalogue import build_scheme
+from inserr.schemes.composition import build_timeline
+from inserr.schemes.vehicle_motion import YawSwing
 
 HOURS = 72.0
 RATE_HZ = 100.0

@@ -1,8 +1,8 @@
 """Wall time of the linear analysis against the nonlinear reference on the same 72 h scenario.
 
-The linear analysis is :func:`inserr.summary.run_scheme` (deterministic response,
+The linear analysis is :func:`inserr.drift.study.run_scheme` (deterministic response,
 per-source responses, noise covariance: everything ``inserr drift`` computes). The
-nonlinear reference is :func:`inserr.reference.simulate` with one deterministic run
+nonlinear reference is :func:`inserr.reference.strapdown.simulate` with one deterministic run
 at the IMU rate (100 Hz, P0's), timed on a slice of the same scenario's attitude
 history and extrapolated linearly in time: its cost per sample is constant (every
 chunk does the same work), and numba's one-off compilation is excluded by a
@@ -44,7 +44,7 @@ SCENARIOS = {
 
 
 def _scenario(spec):
-    from inserr.scenario import load_scenario, scenario_from_dict
+    from inserr.scenario.schema import load_scenario, scenario_from_dict
 
     if isinstance(spec, Path):
         return load_scenario(spec).with_changes(
@@ -55,9 +55,9 @@ def _scenario(spec):
 
 def measure(name: str, spec, slice_hours: float, rate: float) -> dict:
     """Wall times (s) of the linear analysis and of the extrapolated nonlinear reference."""
-    from inserr.reference import attitude_history, deterministic_run, simulate
-    from inserr.summary import run_scheme
-    from inserr.units import HOUR
+    from inserr.core.units import HOUR
+    from inserr.drift.study import run_scheme
+    from inserr.reference.strapdown import attitude_history, deterministic_run, simulate
 
     scen = _scenario(spec)
     lin_times = []
@@ -90,10 +90,10 @@ def main(argv: list[str] | None = None) -> int:
 
     import numpy as np
 
-    from inserr.earth import Site
-    from inserr.errors import InputError
-    from inserr.imu import ImuErrors, InitialErrors
-    from inserr.reference import RunSpec, require_pyins, simulate
+    from inserr.core.earth import Site
+    from inserr.core.errors import InputError
+    from inserr.core.imu import ImuErrors, InitialErrors
+    from inserr.reference.strapdown import RunSpec, require_pyins, simulate
 
     try:
         require_pyins()

@@ -22,9 +22,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from inserr.scenario import scenario_from_dict
-from inserr.sweep import build_grid
-from inserr.sweep_run import run_sweep
+from inserr.scenario.schema import scenario_from_dict
+from inserr.sweep.grid import build_grid
+from inserr.sweep.runner import run_sweep
 
 BASE = {  # P0's navigation-grade budget and yaw swing, 72 h at P0's site latitude
     "scenario": {"name": "bench", "duration": "72 h"},
@@ -68,7 +68,7 @@ def timed(grid, root: Path, label: str, **engine) -> tuple[float, str]:
     label : str
         Name of the run, printed and used as the directory name.
     **engine
-        ``scheduler`` and ``workers`` for :func:`inserr.sweep_run.run_sweep`.
+        ``scheduler`` and ``workers`` for :func:`inserr.sweep.runner.run_sweep`.
 
     Returns
     -------
@@ -116,8 +116,8 @@ def main() -> None:
         import control  # noqa: F401
         import filterpy.kalman  # noqa: F401
 
-        import inserr.drift  # noqa: F401
-        import inserr.summary  # noqa: F401
+        import inserr.drift.analysis  # noqa: F401
+        import inserr.drift.study  # noqa: F401
 
         one, csv1 = timed(grid, root, "1 worker", workers=1)
         two, csv2 = timed(grid, root, "2 processes", workers=2, scheduler="processes")

@@ -14,9 +14,9 @@ import io
 import sys
 from pathlib import Path
 
-from inserr import plots
-from inserr.scenario import Scenario, scenario_from_dict
-from inserr.schemes import SCHEMES
+from inserr.drift import figures as plots
+from inserr.scenario.schema import Scenario, scenario_from_dict
+from inserr.schemes.catalogue import SCHEMES
 
 #: Table rate and stop of every catalogue figure (short stops keep two cycles readable).
 RATE = "6 deg/s"
@@ -64,7 +64,7 @@ def scheme_figure(name: str) -> bytes:
 
 
 def scheme_figures() -> dict[str, bytes]:
-    """``figures/schemes/<name>.png`` -> PNG, one per scheme in :data:`inserr.schemes.SCHEMES`."""
+    """``figures/schemes/<name>.png`` -> PNG, one per :data:`inserr.schemes.catalogue.SCHEMES`."""
     return {f"figures/schemes/{name}.png": scheme_figure(name) for name in SCHEMES}
 
 

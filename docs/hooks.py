@@ -7,7 +7,7 @@
 * ``on_page_markdown`` replaces the markers of ``docs/cli.md`` and ``docs/api.md``
   with the reference generated from the argparse parsers (``docs/gen_cli.py``) and
   the ``:::`` blocks of every inserr module (rendered by mkdocstrings), and warns
-  (failing the strict build) when a scheme of :data:`inserr.schemes.SCHEMES` has no
+  (failing the strict build) when a scheme of :data:`inserr.schemes.catalogue.SCHEMES` has no
   figure in ``docs/schemes.md``.
 """
 
@@ -79,7 +79,7 @@ def on_page_markdown(markdown: str, *, page, config, files) -> str:
     elif src == "api.md":
         markdown = markdown.replace(API_MARKER, api_blocks())
     elif src == "schemes.md":
-        from inserr.schemes import SCHEMES
+        from inserr.schemes.catalogue import SCHEMES
 
         for name in SCHEMES:
             if f"figures/schemes/{name}.png" not in markdown:

@@ -19,8 +19,7 @@ from filterpy.kalman import KalmanFilter
 from scipy.linalg import expm
 from scipy.stats import chi2
 
-from inserr import earth
-from inserr.alignment import (
+from inserr.alignment.filter import (
     STATES,
     Prior,
     Settings,
@@ -29,15 +28,13 @@ from inserr.alignment import (
     observability_degree,
     run_alignment,
 )
-from inserr.alignment_study import Base, alignment_timeline
+from inserr.alignment.study import Base, alignment_timeline
 from inserr.cli.main import main
-from inserr.earth import Site
-from inserr.errors import InputError
-from inserr.imu import ImuErrors
-from inserr.model import ErrorModel, Layout
-from inserr.motion import Motion, YawSwing
-from inserr.timeline import Timeline
-from inserr.units import (
+from inserr.core import earth
+from inserr.core.earth import Site
+from inserr.core.errors import InputError
+from inserr.core.imu import ImuErrors
+from inserr.core.units import (
     ARCMIN,
     ARCSEC,
     DEG,
@@ -46,6 +43,9 @@ from inserr.units import (
     MICRO_G,
     MICRO_G_PER_SQRT_HZ,
 )
+from inserr.model.psi_model import ErrorModel, Layout
+from inserr.model.timeline import Timeline
+from inserr.schemes.vehicle_motion import Motion, YawSwing
 
 LAT = 34.0 * DEG
 SITE = Site(LAT)

@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import stats
 
-from inserr.calibration import (
+from inserr.calibration.estimation import (
     PARAMETER_NAMES,
     CalibrationDesign,
     MonteCarloConfig,
@@ -27,12 +27,8 @@ from inserr.calibration import (
     p1_truth,
     truth_vector,
 )
-from inserr.calibration_design import design_sets, set_criterion
-from inserr.cli.main import main
-from inserr.earth import OMEGA_IE, Site, gravity
-from inserr.errors import InputError
-from inserr.imu import ImuErrors
-from inserr.mechanism import (
+from inserr.calibration.position_sets import design_sets, set_criterion
+from inserr.calibration.two_axis_table import (
     Position,
     PositionSet,
     azimuth_table,
@@ -40,7 +36,11 @@ from inserr.mechanism import (
     offaxis_four_position,
     six_position,
 )
-from inserr.rotations import rot_axis
+from inserr.cli.main import main
+from inserr.core.earth import OMEGA_IE, Site, gravity
+from inserr.core.errors import InputError
+from inserr.core.imu import ImuErrors
+from inserr.core.rotations import rot_axis
 
 LAT = math.radians(34.0)
 SITE = Site(LAT)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from inserr.errors import InputError
+from inserr.core.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "analyses" / "p1_calibration" / "run.py"
@@ -89,9 +89,9 @@ def test_verdict_follows_the_numbers(run_module):
 
 
 def test_sensitivity_sentence_follows_the_numbers(run_module):
-    from inserr.calibration_report import positioning_sensitivity_summary
-    from inserr.earth import Site
-    from inserr.mechanism import six_position
+    from inserr.calibration.summary import positioning_sensitivity_summary
+    from inserr.calibration.two_axis_table import six_position
+    from inserr.core.earth import Site
 
     block = positioning_sensitivity_summary(six_position(), Site(math.radians(34.0)), "gyro")
     text = run_module.sensitivity_sentence("six", block, 3.0)

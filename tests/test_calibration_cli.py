@@ -15,15 +15,15 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from inserr.calibration import PARAMETER_NAMES, p1_truth
+from inserr.calibration.estimation import PARAMETER_NAMES, p1_truth
+from inserr.calibration.two_axis_table import builtin_set
 from inserr.cli.main import main
-from inserr.earth import OMEGA_IE, gravity
-from inserr.mechanism import builtin_set
+from inserr.core.earth import OMEGA_IE, gravity
 
 LAT = math.radians(34.0)  # the CLI default
 EPS = np.finfo(float).eps
 ARCSEC = math.radians(1.0 / 3600.0)
-# SI value of one engineering unit, written out independently of inserr.units.
+# SI value of one engineering unit, written out independently of inserr.core.units.
 UNIT_SI = {
     "ppm/arcsec": 1e-6 / ARCSEC,
     "arcsec/arcsec": 1.0,

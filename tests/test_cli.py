@@ -6,7 +6,7 @@ import math
 import pytest
 
 from inserr.cli.main import main
-from inserr.earth import OMEGA_IE
+from inserr.core.earth import OMEGA_IE
 
 
 def _json(capsys, argv):
@@ -248,9 +248,9 @@ def test_flag_errors_name_the_flag_typed(capsys):
 def test_every_run_in_a_report_gets_its_noise_envelope():
     # The README's main job compares several schemes: each panel must carry its own
     # 1-sigma noise envelope, RMS and worst-case curves, not just the first run.
-    from inserr import plots
-    from inserr.scenario import scenario_from_dict
-    from inserr.summary import run_scheme
+    from inserr.drift import figures as plots
+    from inserr.drift.study import run_scheme
+    from inserr.scenario.schema import scenario_from_dict
 
     scen = scenario_from_dict(
         {

@@ -7,13 +7,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from inserr.cycle import cycle_integrals
-from inserr.imu import MISALIGNMENT_INDEX, MISALIGNMENTS
-from inserr.motion import Motion
-from inserr.rotations import rot_axis
-from inserr.schedule import build_timeline
-from inserr.schemes import PSINS_SIXTEEN, Step, TableScheme, build_scheme
-from inserr.units import DEG
+from inserr.core.imu import MISALIGNMENT_INDEX, MISALIGNMENTS
+from inserr.core.rotations import rot_axis
+from inserr.core.units import DEG
+from inserr.schemes.catalogue import build_scheme
+from inserr.schemes.composition import build_timeline
+from inserr.schemes.cycle_integrals import cycle_integrals
+from inserr.schemes.open_loop import PSINS_SIXTEEN, Step, TableScheme
+from inserr.schemes.vehicle_motion import Motion
 
 RATE = 6 * DEG
 PERIODIC = [
@@ -29,7 +30,8 @@ PERIODIC = [
 def _numerical(scheme: TableScheme, motion=None):
     """Gauss-Legendre integral of C_s^n (and the SF/misalignment x rate terms) over one cycle.
 
-    Independent of inserr.cycle: the attitude comes from the schedule/timeline path
+    Independent of inserr.schemes.cycle_integrals: the attitude comes from the
+    schedule/timeline path
     (Rodrigues rotations of the planned table), integrated interval by interval.
     """
     motion = motion or Motion()

@@ -79,7 +79,7 @@ def test_site_builds_in_strict_mode(tmp_path):
     )
     assert proc.returncode == 0, proc.stderr[-4000:]
     from inserr.cli.main import available_commands
-    from inserr.schemes import SCHEMES
+    from inserr.schemes.catalogue import SCHEMES
 
     for name in SCHEMES:  # one generated figure per scheme
         assert (site / "figures" / "schemes" / f"{name}.png").stat().st_size > 1000
@@ -88,7 +88,12 @@ def test_site_builds_in_strict_mode(tmp_path):
         assert f'id="inserr-{command}"' in cli
     assert "--scheduler" in cli and "--param" in cli
     api = (site / "api" / "index.html").read_text(encoding="utf-8")
-    for module in ("inserr.scenario", "inserr.summary", "inserr.sweep", "inserr.units"):
+    for module in (
+        "inserr.scenario.schema",
+        "inserr.drift.study",
+        "inserr.sweep.grid",
+        "inserr.core.units",
+    ):
         assert f'id="{module}"' in api
     assert "<!-- inserr:" not in cli + api  # the markers were replaced
     hooks = load_docs_module("hooks")
@@ -145,7 +150,7 @@ def test_readme_example_runs(capsys):
 
 
 def test_scenario_reference_lists_every_scheme():
-    from inserr.schemes import SCHEMES
+    from inserr.schemes.catalogue import SCHEMES
 
     text = (ROOT / "docs" / "scenarios.md").read_text(encoding="utf-8")
     assert [n for n in SCHEMES if f"`{n}`" not in text] == []

@@ -7,12 +7,12 @@ import pytest
 import scipy.linalg as sl
 from scipy.integrate import quad_vec
 
-from inserr.discretize import Discretizer
-from inserr.earth import OMEGA_IE, Site
-from inserr.model import DR, PSI, ErrorModel, Layout, attitude_error, modes
-from inserr.propagate import propagate_states
-from inserr.timeline import Timeline
-from inserr.units import DEG, DEG_PER_HOUR, MICRO_G, PPM
+from inserr.core.earth import OMEGA_IE, Site
+from inserr.core.units import DEG, DEG_PER_HOUR, MICRO_G, PPM
+from inserr.model.discretization import Discretizer
+from inserr.model.exact_propagation import propagate_states
+from inserr.model.psi_model import DR, PSI, ErrorModel, Layout, attitude_error, modes
+from inserr.model.timeline import Timeline
 
 
 @pytest.mark.parametrize("lat", [0.0, 34.0, 60.0])
@@ -272,7 +272,7 @@ def test_free_vertical_channel_diverges_with_sqrt_2g_over_r():
 def test_position_error_initial_condition_keeps_phi():
     # An initial position error alone is not an attitude error: phi(0) = 0.
     site = Site.from_degrees(34.0)
-    from inserr.sources import Source, unit_column
+    from inserr.model.error_sources import Source, unit_column
 
     model = ErrorModel(site)
     x = unit_column(model, Source("initial_position_e", "initial_position", 10.0), np.eye(3)) * 10.0

@@ -20,10 +20,19 @@ import math
 import numpy as np
 import pytest
 
-from inserr import earth
 from inserr.cli.main import main
-from inserr.errors import InputError
-from inserr.northfinder import (
+from inserr.core import earth
+from inserr.core.errors import InputError
+from inserr.core.units import DEG, DEG_PER_S, MIL
+from inserr.northfinder.bounds import crlb
+from inserr.northfinder.filter import (
+    measurement_rows,
+    period_measurements,
+    run_filter,
+    solve,
+    wrap_angle,
+)
+from inserr.northfinder.instrument import (
     Instrument,
     Pose,
     SensorGrade,
@@ -32,22 +41,13 @@ from inserr.northfinder import (
     simulate,
     true_coefficients,
 )
-from inserr.northfinder_bounds import crlb
-from inserr.northfinder_filter import (
-    measurement_rows,
-    period_measurements,
-    run_filter,
-    solve,
-    wrap_angle,
-)
-from inserr.northfinder_study import (
+from inserr.northfinder.study import (
     EQUATORIAL_BAND,
     POLAR_BAND,
     diagnose,
     monte_carlo,
     table_elevation,
 )
-from inserr.units import DEG, DEG_PER_S, MIL
 
 OMEGA = earth.OMEGA_IE
 GRADE = SensorGrade()

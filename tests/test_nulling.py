@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from inserr.cycle import cycle_integrals
-from inserr.earth import Site
-from inserr.errors import InputError
-from inserr.motion import Motion, Turn, YawSwing
-from inserr.nulling import (
+from inserr.core.earth import Site
+from inserr.core.errors import InputError
+from inserr.schemes.catalogue import build_scheme
+from inserr.schemes.cycle_integrals import cycle_integrals
+from inserr.schemes.nulling import (
     PHASE_FRACTIONS,
     PHASE_MODULUS,
     TURNS,
@@ -21,7 +21,8 @@ from inserr.nulling import (
     step_dwell,
     yaw_rate_reversals,
 )
-from inserr.schemes import Step, TableScheme, build_scheme
+from inserr.schemes.open_loop import Step, TableScheme
+from inserr.schemes.vehicle_motion import Motion, Turn, YawSwing
 
 DEG = math.pi / 180.0
 RATE = 6 * DEG
@@ -153,7 +154,7 @@ def test_reversals_through_a_hold_are_found():
     the reversals are the middles of the holds, 15 s and 35 s (exact for this
     piecewise-linear heading; the samples fall on the hold edges).
     """
-    from inserr.motion import HeadingHistory
+    from inserr.schemes.vehicle_motion import HeadingHistory
 
     times = np.array([0.0, 10.0, 20.0, 30.0, 40.0, 50.0])
     headings = np.radians([0.0, 10.0, 10.0, 0.0, 0.0, 10.0])

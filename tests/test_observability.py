@@ -17,13 +17,7 @@ import control
 import numpy as np
 import pytest
 
-from inserr import earth
-from inserr.cli.main import main
-from inserr.earth import Site
-from inserr.errors import InputError
-from inserr.model import ErrorModel, Layout
-from inserr.motion import Motion
-from inserr.observability import (
+from inserr.alignment.observability import (
     Pwcs,
     Segment,
     Vocabulary,
@@ -34,10 +28,16 @@ from inserr.observability import (
     segment_observability,
     stacked_observability,
 )
-from inserr.rotations import rot_z
-from inserr.schedule import build_timeline
-from inserr.schemes import build_scheme
-from inserr.units import DEG
+from inserr.cli.main import main
+from inserr.core import earth
+from inserr.core.earth import Site
+from inserr.core.errors import InputError
+from inserr.core.rotations import rot_z
+from inserr.core.units import DEG
+from inserr.model.psi_model import ErrorModel, Layout
+from inserr.schemes.catalogue import build_scheme
+from inserr.schemes.composition import build_timeline
+from inserr.schemes.vehicle_motion import Motion
 
 LAT = 34.0 * DEG
 SITE = Site(LAT)

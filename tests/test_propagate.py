@@ -6,16 +6,10 @@ import numpy as np
 import pytest
 import scipy.linalg as sl
 
-from inserr.discretize import Discretizer
-from inserr.drift import analyze_drift
-from inserr.earth import Site
-from inserr.imu import ImuErrors, InitialErrors
-from inserr.model import ErrorModel, Layout
-from inserr.propagate import propagate_covariance, propagate_states
-from inserr.rotations import rot_z
-from inserr.signs import worst_case_norm
-from inserr.timeline import Timeline
-from inserr.units import (
+from inserr.core.earth import Site
+from inserr.core.imu import ImuErrors, InitialErrors
+from inserr.core.rotations import rot_z
+from inserr.core.units import (
     ARCSEC,
     DEG,
     DEG_PER_HOUR,
@@ -24,6 +18,12 @@ from inserr.units import (
     MICRO_G_PER_SQRT_HZ,
     PPM,
 )
+from inserr.drift.analysis import analyze_drift
+from inserr.drift.unknown_signs import worst_case_norm
+from inserr.model.discretization import Discretizer
+from inserr.model.exact_propagation import propagate_covariance, propagate_states
+from inserr.model.psi_model import ErrorModel, Layout
+from inserr.model.timeline import Timeline
 
 
 def _stop_and_turn_timeline():
@@ -179,10 +179,10 @@ def test_worst_case_sign_pattern_matches_brute_force():
 def test_results_do_not_depend_on_cache_history():
     # The shared discretization cache must give bit-identical numbers whatever ran
     # before (sweeps rely on it: same grid, same numbers, any worker count).
-    from inserr import discretize
-    from inserr.motion import YawSwing
-    from inserr.schedule import build_timeline
-    from inserr.schemes import build_scheme
+    from inserr.model import discretization as discretize
+    from inserr.schemes.catalogue import build_scheme
+    from inserr.schemes.composition import build_timeline
+    from inserr.schemes.vehicle_motion import YawSwing
 
     site = Site.from_degrees(34.0)
     imu = ImuErrors(
@@ -217,9 +217,9 @@ def test_bad_output_grids_are_refused_not_extrapolated(t_out):
 
 
 def test_cycle_integrals_accept_a_motion_that_does_not_move():
-    from inserr.cycle import cycle_integrals
-    from inserr.motion import Motion, Turn
-    from inserr.schemes import build_scheme
+    from inserr.schemes.catalogue import build_scheme
+    from inserr.schemes.cycle_integrals import cycle_integrals
+    from inserr.schemes.vehicle_motion import Motion, Turn
 
     scheme = build_scheme("four-position", math.radians(6.0), 300.0)
     a = cycle_integrals(scheme, Motion())

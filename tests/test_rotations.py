@@ -5,8 +5,16 @@ import math
 import numpy as np
 import pytest
 
-from inserr.rotations import body_to_nav, euler_from_dcm, heading_of, log_so3, rot_axis, rot_z, skew
-from inserr.table import table_dcm
+from inserr.core.rotations import (
+    body_to_nav,
+    euler_from_dcm,
+    heading_of,
+    log_so3,
+    rot_axis,
+    rot_z,
+    skew,
+)
+from inserr.schemes.turntable import table_dcm
 
 E, N, U = np.eye(3)
 

@@ -7,10 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from inserr.cli.flags import FLAGS
-from inserr.errors import InputError
-from inserr.scenario import SCHEMA, load_scenario, scenario_from_dict
-from inserr.units import (
+from inserr.core.errors import InputError
+from inserr.core.units import (
     ARCSEC,
     DEG,
     DEG_PER_HOUR,
@@ -20,6 +18,8 @@ from inserr.units import (
     PPM,
     parse_quantity,
 )
+from inserr.scenario.flags import FLAGS
+from inserr.scenario.schema import SCHEMA, load_scenario, scenario_from_dict
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "scenarios.md"
 

@@ -5,15 +5,16 @@ import math
 import numpy as np
 import pytest
 
-from inserr.drift import analyze_drift
-from inserr.earth import Site
-from inserr.imu import ImuErrors, InitialErrors
-from inserr.motion import Motion, Turn, YawSwing
-from inserr.rotations import heading_of
-from inserr.schedule import build_timeline
-from inserr.schemes import Step, build_scheme
-from inserr.table import table_dcm
-from inserr.units import ARCSEC, DEG, DEG_PER_HOUR, MICRO_G, PPM
+from inserr.core.earth import Site
+from inserr.core.imu import ImuErrors, InitialErrors
+from inserr.core.rotations import heading_of
+from inserr.core.units import ARCSEC, DEG, DEG_PER_HOUR, MICRO_G, PPM
+from inserr.drift.analysis import analyze_drift
+from inserr.schemes.catalogue import build_scheme
+from inserr.schemes.composition import build_timeline
+from inserr.schemes.open_loop import Step
+from inserr.schemes.turntable import table_dcm
+from inserr.schemes.vehicle_motion import Motion, Turn, YawSwing
 
 RATE = 6 * DEG
 P0_MOTION = YawSwing(
@@ -178,7 +179,8 @@ def test_flexible_fallback_stops_at_the_best_sample_of_one_turn(variant, turn_ra
 
 
 def test_every_scheme_starts_with_a_stop_at_its_first_position():
-    from inserr.schemes import SCHEMES, TableScheme
+    from inserr.schemes.catalogue import SCHEMES
+    from inserr.schemes.open_loop import TableScheme
 
     custom = [Step("outer", 90 * DEG, 60.0, label="B"), Step("outer", -90 * DEG, 60.0)]
     for name in SCHEMES:
@@ -208,7 +210,7 @@ def test_motor_starts_of_two_position():
 
 
 def test_bad_durations_and_schemes_raise_input_errors():
-    from inserr.errors import InputError
+    from inserr.core.errors import InputError
 
     with pytest.raises(InputError, match="duration"):
         build_timeline(build_scheme("none", RATE, 300.0).plan(Motion(), 10.0), Motion(), -5.0)

@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 
 from inserr.cli.main import main
-from inserr.scenario import scenario_from_dict
-from inserr.sweep import build_grid, default_out_dir, parse_param, slug
-from inserr.sweep_store import is_sweep_figure, sweep_figures
-from inserr.units import DEG, HOUR, MICRO_G
+from inserr.core.units import DEG, HOUR, MICRO_G
+from inserr.scenario.schema import scenario_from_dict
+from inserr.sweep.grid import build_grid, default_out_dir, parse_param, slug
+from inserr.sweep.store import is_sweep_figure, sweep_figures
 
 # One-hour scenarios keep every point well under a second. The budget has a
 # Gauss-Markov gyro bias (rotating noise states) and the grid short stops: the
@@ -193,7 +193,7 @@ def test_small_grid_locally(sync_run):
     ]  # fmt: skip
     assert all(r["status"] == "ok" and r["error"] == "" for r in table)
     # each row is the drift analysis of the base scenario with that point's values
-    from inserr.summary import run_scheme
+    from inserr.drift.study import run_scheme
 
     scen = scenario_from_dict(
         {
@@ -227,7 +227,7 @@ def _png(**savefig) -> bytes:
 
 def test_figures_always_belong_to_the_current_results(tmp_path):
     """Each run leaves exactly its own figures; files inserr did not write stay as they are."""
-    from inserr.sweep_run import LocalEngine, run_sweep
+    from inserr.sweep.runner import LocalEngine, run_sweep
 
     out = tmp_path / "out"
     # A sweep directory exists first (a new sweep refuses a directory of other files);
@@ -273,7 +273,7 @@ def test_figures_always_belong_to_the_current_results(tmp_path):
 
 def test_figure_mark_is_read_from_the_png_chunks(tmp_path):
     """Only PNG files with inserr's text chunk count as inserr's figures."""
-    from inserr.sweep_store import FIGURE_MARK
+    from inserr.sweep.store import FIGURE_MARK
 
     cases = {
         "marked.png": _png(metadata=dict([FIGURE_MARK])),
@@ -304,7 +304,7 @@ def test_plot_axes_carry_units():
     """Heatmap and line axes name the unit of the values (the flag's, or the written one)."""
     import matplotlib.pyplot as plt
 
-    from inserr.sweep_plots import figures
+    from inserr.sweep.figures import figures
 
     base = scenario_from_dict({"scheme": {"name": "four-position"}})
 
@@ -392,16 +392,16 @@ def test_loopback_cluster_gives_identical_results(sync_run, tmp_path):
 @pytest.fixture
 def count_runs(monkeypatch):
     """Count the drift analyses done in this process (sync scheduler)."""
-    import inserr.summary
+    import inserr.drift.study
 
     calls = []
-    real = inserr.summary.run_scheme
+    real = inserr.drift.study.run_scheme
 
     def counting(scen, name=None):
         calls.append(scen.scheme_stop)
         return real(scen, name)
 
-    monkeypatch.setattr(inserr.summary, "run_scheme", counting)
+    monkeypatch.setattr(inserr.drift.study, "run_scheme", counting)
     return calls
 
 
@@ -435,23 +435,23 @@ def test_growing_the_grid_reuses_finished_points(tmp_path, capsys, count_runs):
 
 def test_failing_point_does_not_sink_the_sweep(tmp_path, monkeypatch, capsys):
     """A point that raises is recorded as failed and retried on a rerun."""
-    import inserr.summary
+    import inserr.drift.study
 
-    real = inserr.summary.run_scheme
+    real = inserr.drift.study.run_scheme
 
     def flaky(scen, name=None):
         if scen.scheme_stop == 20 and scen.scheme_rate == 10 * DEG:
             raise RuntimeError("simulated failure")
         return real(scen, name)
 
-    monkeypatch.setattr(inserr.summary, "run_scheme", flaky)
+    monkeypatch.setattr(inserr.drift.study, "run_scheme", flaky)
     out = tmp_path / "out"
     assert sweep(out, "--workers", "1") == 1  # 1: some point failed and may succeed on a rerun
     table = rows(out)
     assert [r["status"] for r in table] == ["ok", "failed", "ok", "ok"]
     assert "RuntimeError: simulated failure" in table[1]["error"]
     assert table[1]["max_horizontal_error_nmi"] == ""
-    monkeypatch.setattr(inserr.summary, "run_scheme", real)
+    monkeypatch.setattr(inserr.drift.study, "run_scheme", real)
     capsys.readouterr()
     assert sweep(out, "--workers", "1", "--json") == 0  # the failed point is retried, only it
     assert json.loads(capsys.readouterr().out)["computed"] == 1
@@ -536,7 +536,7 @@ def test_sweep_out_never_mixes_with_a_users_files(tmp_path, monkeypatch, capsys)
     """A sweep refuses a file, the working directory and a directory of other files,
     before any work; an earlier sweep's directory is accepted (that is resuming)."""
     from inserr.cli.main import main
-    from inserr.sweep_store import check_sweep_dir
+    from inserr.sweep.store import check_sweep_dir
 
     mine = tmp_path / "notes"
     mine.mkdir()

@@ -3,10 +3,10 @@
 Static vs two-position vs four-position vs continuous rotation during a 10-minute
 fine alignment at the P0 site with the P0 IMU budget:
 
-* the alignment filter (:mod:`inserr.alignment`) per scheme on a static base and on
+* the alignment filter (:mod:`inserr.alignment.filter`) per scheme on a static base and on
   P0's swinging base: final 1 sigma, convergence time, degree of observability, the
   least reduced directions of the normalised covariance, one simulated run;
-* the piecewise-constant observability analysis (:mod:`inserr.observability`) of each
+* the piecewise-constant observability analysis (:mod:`inserr.alignment.observability`) of each
   scheme's timeline, with and without position updates, and the classic 10-state
   picture (one heading vs two headings 180 deg apart);
 * what indexing costs in time (time spent turning, time to beat the static heading
@@ -34,8 +34,9 @@ from pathlib import Path
 
 import numpy as np
 
-from inserr.alignment import STATES, UNITS, AlignmentResult, Prior, Settings, static_floors
-from inserr.alignment_study import (
+from inserr.alignment.filter import STATES, UNITS, AlignmentResult, Prior, Settings, static_floors
+from inserr.alignment.observability import alignment10, analyze, full_timeline
+from inserr.alignment.study import (
     SHOWN,
     Base,
     alignment_timeline,
@@ -45,14 +46,9 @@ from inserr.alignment_study import (
     time_to_reach,
     weakest_directions,
 )
-from inserr.errors import InputError
-from inserr.imu import ImuErrors
-from inserr.model import ErrorModel, Layout
-from inserr.motion import YawSwing
-from inserr.observability import alignment10, analyze, full_timeline
-from inserr.report import MARKER, check_report_dir, dumps, replace_dir
-from inserr.scenario import scenario_from_dict
-from inserr.units import (
+from inserr.core.errors import InputError
+from inserr.core.imu import ImuErrors
+from inserr.core.units import (
     ARCMIN,
     ARCSEC,
     DEG_PER_HOUR,
@@ -62,6 +58,10 @@ from inserr.units import (
     PPM,
     parse_quantity,
 )
+from inserr.model.psi_model import ErrorModel, Layout
+from inserr.output.report import MARKER, check_report_dir, dumps, replace_dir
+from inserr.scenario.schema import scenario_from_dict
+from inserr.schemes.vehicle_motion import YawSwing
 
 HERE = Path(__file__).resolve().parent
 #: Sections of scenario.toml that are this study's, not inserr's scenario schema.
@@ -216,7 +216,7 @@ def separately_observable(model, system, result, c_sn0) -> dict[str, bool]:
     error, which zero-velocity updates never see, but that term is dr/R (0.3 arcsec
     for 10 m) and not what "is heading observable" asks.
     """
-    from inserr.alignment import report_transform
+    from inserr.alignment.filter import report_transform
 
     m = report_transform(model, c_sn0)
     cols = [model.layout.names.index(nm) for nm in system.names]

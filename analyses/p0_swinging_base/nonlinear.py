@@ -58,7 +58,7 @@ def _load(path: Path, hours: float | None):
     """The scenario of ``path``; its [compare] list may name schemes not built yet."""
     import tomllib
 
-    from inserr.scenario import scenario_from_dict
+    from inserr.scenario.schema import scenario_from_dict
 
     data = tomllib.loads(path.read_text(encoding="utf-8"))
     wanted = list(data.get("compare", {}).get("schemes", []))
@@ -108,9 +108,9 @@ def cache_file(path: Path, scheme: str, hours: float | None, rate: float) -> Pat
 
 def run_case(path: Path, scheme: str, hours: float | None, rate: float) -> Path:
     """Linear analysis and both nonlinear runs of one case; cached atomically as .npz."""
-    from inserr.reference import RunSpec, attitude_history, deterministic_run, simulate
-    from inserr.summary import run_scheme
-    from inserr.validation import compare
+    from inserr.drift.study import run_scheme
+    from inserr.reference.strapdown import RunSpec, attitude_history, deterministic_run, simulate
+    from inserr.reference.validation import compare
 
     out = cache_file(path, scheme, hours, rate)
     if out.is_file():
@@ -207,8 +207,8 @@ PROBES: tuple[tuple[str, dict], ...] = tuple(
 
 def linearity_limits(path: Path) -> list[dict]:
     """Linear vs nonlinear for each probe of :data:`PROBES` (base: P0's site and attitude)."""
-    from inserr.scenario import scenario_from_dict
-    from inserr.validation import validate
+    from inserr.reference.validation import validate
+    from inserr.scenario.schema import scenario_from_dict
 
     scen, _ = _load(path, None)
     raw = {k: dict(v) for k, v in scen.raw.items() if k in ("site", "motion")}
@@ -244,7 +244,7 @@ def rate_dependence(path: Path, hours: float = 1.0) -> list[dict]:
     of the inverse navigation around table starts and stops) shrinks as the rate grows;
     the linearisation error does not depend on it. The trend separates the two.
     """
-    from inserr.validation import validate
+    from inserr.reference.validation import validate
 
     scen, _ = _load(path, hours)
     scen = scen.with_changes({"scheme.name": "two-position", "compare.schemes": []})
@@ -271,10 +271,10 @@ def pseudo_drift_check(path: Path, heading_deg: float = 3.0) -> dict:
     nonlinear-minus-linear difference; what remains is due to other second-order terms.
     """
 
-    from inserr.earth import OMEGA_IE
-    from inserr.scenario import scenario_from_dict
-    from inserr.summary import run_scheme
-    from inserr.validation import interpolate, validate
+    from inserr.core.earth import OMEGA_IE
+    from inserr.drift.study import run_scheme
+    from inserr.reference.validation import interpolate, validate
+    from inserr.scenario.schema import scenario_from_dict
 
     scen, _ = _load(path, None)
     raw = {k: dict(v) for k, v in scen.raw.items() if k in ("site", "motion")}
@@ -301,7 +301,7 @@ def pseudo_drift_check(path: Path, heading_deg: float = 3.0) -> dict:
 
 
 def _case_row(info: dict) -> dict:
-    from inserr.units import NMI
+    from inserr.core.units import NMI
 
     m = info["metrics"]
     row = {
@@ -346,7 +346,7 @@ def figure(cases: list[tuple[dict, dict]], title: str):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from inserr.units import HOUR, NMI
+    from inserr.core.units import HOUR, NMI
 
     fig, (ax, axd) = plt.subplots(
         2, 1, figsize=(9, 7), sharex=True, gridspec_kw={"height_ratios": [2, 1]}
@@ -391,7 +391,8 @@ def figure(cases: list[tuple[dict, dict]], title: str):
 
 
 DESCRIPTION = (
-    "P0 experiments through the nonlinear reference (inserr.reference: python-ins strapdown "
+    "P0 experiments through the nonlinear reference (inserr.reference.strapdown: python-ins "
+    "strapdown "
     "navigation of ideal increments from inverse navigation, P0's IMU budget injected in the "
     "IMU frame). Per case: the linear psi-angle prediction and the nonlinear run with the same "
     "deterministic errors (constants as given, no noise); horizontal errors in nautical miles. "
@@ -662,9 +663,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = p.parse_args(argv)
 
-    from inserr.reference import require_pyins
-    from inserr.report import dumps, write_text_atomic
-    from inserr.units import NMI
+    from inserr.core.units import NMI
+    from inserr.output.report import dumps, write_text_atomic
+    from inserr.reference.strapdown import require_pyins
 
     require_pyins()
     hours = QUICK_HOURS if args.quick else None

@@ -33,15 +33,15 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from inserr import plots
-from inserr.drift import DriftResult, analyze_drift
-from inserr.nulling import error_integrals
-from inserr.report import Report, dumps, write_text_atomic
-from inserr.scenario import Scenario, load_scenario
-from inserr.schedule import build_timeline
-from inserr.signs import rms_norm, worst_case_norm
-from inserr.summary import describe
-from inserr.units import DEG, HOUR, NMI
+from inserr.core.units import DEG, HOUR, NMI
+from inserr.drift import figures as plots
+from inserr.drift.analysis import DriftResult, analyze_drift
+from inserr.drift.study import describe
+from inserr.drift.unknown_signs import rms_norm, worst_case_norm
+from inserr.output.report import Report, dumps, write_text_atomic
+from inserr.scenario.schema import Scenario, load_scenario
+from inserr.schemes.composition import build_timeline
+from inserr.schemes.nulling import error_integrals
 
 HERE = Path(__file__).resolve().parent
 EXPERIMENTS = {"exp1": "scenario.toml", "exp2": "scenario_exp2.toml"}

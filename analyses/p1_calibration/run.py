@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from inserr.calibration import (
+from inserr.calibration.estimation import (
     PARAMETER_NAMES,
     CalibrationDesign,
     MonteCarloConfig,
@@ -31,13 +31,13 @@ from inserr.calibration import (
     parameter_unit,
     positioning_sigma,
 )
-from inserr.calibration_design import (
+from inserr.calibration.position_sets import (
     candidate_tables,
     describe_candidate,
     design_sets,
     set_criterion,
 )
-from inserr.calibration_report import (
+from inserr.calibration.summary import (
     PARAMETER_HEADER,
     calibration_summary,
     deviation_figure,
@@ -47,13 +47,18 @@ from inserr.calibration_report import (
     sensitivity_table,
     std_figure,
 )
-from inserr.earth import Site
-from inserr.errors import InputError, require_latitude
-from inserr.imu import ImuErrors
-from inserr.mechanism import BUILTIN_SETS, PositionSet, builtin_set, load_position_set
-from inserr.progress import progress
-from inserr.report import Report, check_report_dir
-from inserr.units import ARCSEC, DEG_PER_SQRT_HOUR, parse_quantity
+from inserr.calibration.two_axis_table import (
+    BUILTIN_SETS,
+    PositionSet,
+    builtin_set,
+    load_position_set,
+)
+from inserr.core.earth import Site
+from inserr.core.errors import InputError, require_latitude
+from inserr.core.imu import ImuErrors
+from inserr.core.units import ARCSEC, DEG_PER_SQRT_HOUR, parse_quantity
+from inserr.output.progress import progress
+from inserr.output.report import Report, check_report_dir
 
 HERE = Path(__file__).resolve().parent
 CLASSES = {"sf": slice(0, 3), "mis": slice(3, 9), "bias": slice(9, 12)}
@@ -514,7 +519,7 @@ def sensitivity_sentence(name: str, block: dict[str, Any], half_width_arcsec: fl
     """One sentence: the most sensitive parameter(s) of each class and what the table does.
 
     ``block`` is a ``positioning_sensitivity`` block of
-    :func:`inserr.calibration_report.calibration_summary` (parameter unit per arcsec);
+    :func:`inserr.calibration.summary.calibration_summary` (parameter unit per arcsec);
     classes are compared separately because their units differ. Parameters within 1e-6
     of the class maximum are named together.
     """

@@ -20,12 +20,12 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from inserr import plots
-from inserr.cycle import cycle_integrals
-from inserr.report import Report
-from inserr.scenario import Scenario, load_scenario
-from inserr.summary import SchemeRun, describe, run_scheme
-from inserr.units import ARCMIN, DEG, DEG_PER_HOUR, G0, HOUR, MICRO_G
+from inserr.core.units import ARCMIN, DEG, DEG_PER_HOUR, G0, HOUR, MICRO_G
+from inserr.drift import figures as plots
+from inserr.drift.study import SchemeRun, describe, run_scheme
+from inserr.output.report import Report
+from inserr.scenario.schema import Scenario, load_scenario
+from inserr.schemes.cycle_integrals import cycle_integrals
 
 HERE = Path(__file__).resolve().parent
 VARIANTS = {

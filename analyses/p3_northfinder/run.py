@@ -21,10 +21,11 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from inserr.errors import InputError
-from inserr.northfinder import Instrument, Pose, SensorGrade, simulate
-from inserr.northfinder_bounds import bias_instability_psd, crlb
-from inserr.northfinder_filter import (
+from inserr.core.errors import InputError
+from inserr.core.units import DEG, DEG_PER_HOUR, DEG_PER_S, DEG_PER_SQRT_HOUR, MIL, parse_quantity
+from inserr.northfinder.bounds import bias_instability_psd, crlb
+from inserr.northfinder.figures import heading_history_figure, latitude_history_figure
+from inserr.northfinder.filter import (
     hemisphere_name,
     hemisphere_sign,
     period_measurements,
@@ -32,11 +33,10 @@ from inserr.northfinder_filter import (
     solve,
     wrap_angle,
 )
-from inserr.northfinder_plots import heading_history_figure, latitude_history_figure
-from inserr.northfinder_study import EQUATORIAL_BAND, POLAR_BAND, monte_carlo
-from inserr.progress import progress
-from inserr.report import Report
-from inserr.units import DEG, DEG_PER_HOUR, DEG_PER_S, DEG_PER_SQRT_HOUR, MIL, parse_quantity
+from inserr.northfinder.instrument import Instrument, Pose, SensorGrade, simulate
+from inserr.northfinder.study import EQUATORIAL_BAND, POLAR_BAND, monte_carlo
+from inserr.output.progress import progress
+from inserr.output.report import Report
 
 HERE = Path(__file__).resolve().parent
 
@@ -531,7 +531,7 @@ def heading_latitude_map(sc: dict) -> dict:
     dict
         Grids (deg), heading bounds (mil) with latitude unknown and known, latitude
         bound (deg), and ``mc_cells`` (sigma, bias and bound in mil, ratio, ambiguous
-        fraction, and the warnings of :func:`inserr.northfinder_study.diagnose`).
+        fraction, and the warnings of :func:`inserr.northfinder.study.diagnose`).
     """
     pose, ins, grade, t = sc["pose"], sc["instrument"], sc["grade"], sc["time"]
     headings = np.arange(0.0, 2 * math.pi - 1e-9, sc["map_heading_step"])
@@ -778,7 +778,7 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
 
     Returns
     -------
-    inserr.report.Report
+    inserr.output.report.Report
     """
     th, rs, gs = results["time_history"], results["rate_sweep"], results["grade_sweep"]
     bi, mp, sa = results["bias_instability"], results["map"], results["small_angle"]
@@ -1031,7 +1031,7 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
     rep.paragraph(
         "Every cell declares the hemisphere of its own latitude, as a user there would; "
         "the estimator is never told the latitude. The warnings `inserr northfind` "
-        "would print (`inserr.northfinder_study.diagnose`; bands from the tutorial, "
+        "would print (`inserr.northfinder.study.diagnose`; bands from the tutorial, "
         f"§8: polar |L| > {POLAR_BAND / DEG:.1f}°, equatorial |L| or |E| < "
         f"{EQUATORIAL_BAND / DEG:.2f}° with E the Earth-rate elevation above the table "
         "plane, latitude unresolved where |E| < 3 latitude bounds), counted by kind: "

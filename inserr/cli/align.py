@@ -12,7 +12,7 @@ import argparse
 import math
 
 from inserr.cli.common import add_json_flag, axes, emit, format_table, require
-from inserr.units import parse_quantity
+from inserr.core.units import parse_quantity
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -106,8 +106,8 @@ def quantity_flag(text: str, kind: str, flag: str, unit: str) -> float:
 
 def motion_from_args(args: argparse.Namespace):
     """The base motion of ``--heading/--pitch/--roll`` and ``--yaw-swing AMP,PERIOD``."""
-    from inserr.errors import InputError
-    from inserr.motion import Motion, YawSwing
+    from inserr.core.errors import InputError
+    from inserr.schemes.vehicle_motion import Motion, YawSwing
 
     heading = quantity_flag(args.heading, "angle", "--heading", "deg")
     pitch = quantity_flag(args.pitch, "angle", "--pitch", "deg")
@@ -132,11 +132,11 @@ def _setup(args: argparse.Namespace):
     """Validated inputs: (names, base, duration, imu, prior, settings)."""
     import numpy as np
 
-    from inserr.alignment import Prior, Settings
-    from inserr.alignment_study import Base
-    from inserr.earth import Site
-    from inserr.imu import ImuErrors
-    from inserr.schemes import SCHEMES
+    from inserr.alignment.filter import Prior, Settings
+    from inserr.alignment.study import Base
+    from inserr.core.earth import Site
+    from inserr.core.imu import ImuErrors
+    from inserr.schemes.catalogue import SCHEMES
 
     names = [s.strip() for s in args.scheme.split(",") if s.strip()]
     require(bool(names), "--scheme", "no scheme given", "e.g. --scheme none,two-position")
@@ -159,7 +159,7 @@ def _setup(args: argparse.Namespace):
         "bias 1σ must be >= 0",
         "give magnitudes",
     )
-    from inserr.units import parse_quantity
+    from inserr.core.units import parse_quantity
 
     def truth_only(text, kind, flag, unit, size):
         if text is None:
@@ -211,9 +211,9 @@ def _setup(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.alignment import static_floors
-    from inserr.alignment_study import SHOWN, build_report, run_schemes, weakest_directions
-    from inserr.units import ARCMIN, ARCSEC
+    from inserr.alignment.filter import static_floors
+    from inserr.alignment.study import SHOWN, build_report, run_schemes, weakest_directions
+    from inserr.core.units import ARCMIN, ARCSEC
 
     names, base, duration, imu, prior, settings = _setup(args)
     results = run_schemes(base, names, duration, imu, prior, settings)
@@ -297,6 +297,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _key(state: str) -> str:
-    from inserr.alignment import UNITS
+    from inserr.alignment.filter import UNITS
 
     return UNITS[state][0]

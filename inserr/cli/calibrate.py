@@ -21,7 +21,7 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
-from inserr.calibration import (
+from inserr.calibration.estimation import (
     DEFAULT_ARW,
     DEFAULT_VRW,
     P1_POSITIONING_ERROR,
@@ -29,17 +29,17 @@ from inserr.calibration import (
     MonteCarloConfig,
     p1_truth,
 )
-from inserr.cli.common import add_json_flag, emit, format_table, parse_int
-from inserr.earth import Site
-from inserr.errors import InputError, require_latitude
-from inserr.mechanism import (
+from inserr.calibration.two_axis_table import (
     BUILTIN_SETS,
     DEFAULT_DWELL,
     DEFAULT_RATE,
     builtin_set,
     load_position_set,
 )
-from inserr.units import (
+from inserr.cli.common import add_json_flag, emit, format_table, parse_int
+from inserr.core.earth import Site
+from inserr.core.errors import InputError, require_latitude
+from inserr.core.units import (
     ARCSEC,
     DEG,
     DEG_PER_SQRT_HOUR,
@@ -172,8 +172,8 @@ def _position_set(args: argparse.Namespace, rate: float, settle: float):
 
 
 def _design(args: argparse.Namespace, site: Site, rate: float, settle: float, arw: float) -> int:
-    from inserr.calibration_design import describe_candidate, design_sets, set_criterion
-    from inserr.mechanism import offaxis_four_position, six_position
+    from inserr.calibration.position_sets import describe_candidate, design_sets, set_criterion
+    from inserr.calibration.two_axis_table import offaxis_four_position, six_position
 
     dwell = DEFAULT_DWELL if args.dwell is None else _positive(args.dwell, "time", "--dwell", "s")
     try:
@@ -289,7 +289,7 @@ def run(args: argparse.Namespace) -> int:
     )
     pset = _position_set(args, rate, settle)
 
-    from inserr.calibration_report import (
+    from inserr.calibration.summary import (
         PARAMETER_HEADER,
         SENSITIVITY_HEADER,
         build_report,

@@ -7,8 +7,8 @@ import math
 import sys
 from typing import Any
 
-from inserr.errors import InputError
-from inserr.units import parse_quantity
+from inserr.core.errors import InputError
+from inserr.core.units import parse_quantity
 
 
 def finite_float(text: str) -> float:
@@ -75,7 +75,7 @@ def add_json_flag(parser: argparse.ArgumentParser) -> None:
 def emit(args: argparse.Namespace, result: dict[str, Any], human: str) -> None:
     """Print ``result`` as JSON under ``--json``, else the human-readable text."""
     if getattr(args, "json", False):
-        from inserr.report import dumps
+        from inserr.output.report import dumps
 
         sys.stdout.write(dumps(result) + "\n")
     else:

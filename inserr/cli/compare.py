@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 
 from inserr.cli.common import add_json_flag, emit, format_table
-from inserr.cli.flags import add_scenario_flags, scenario_from_args
-from inserr.errors import InputError
-from inserr.progress import progress
+from inserr.core.errors import InputError
+from inserr.output.progress import progress
+from inserr.scenario.flags import add_scenario_flags, scenario_from_args
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -22,7 +22,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.summary import build_report, metrics_table, run_scheme
+    from inserr.drift.study import build_report, metrics_table, run_scheme
 
     scen = scenario_from_args(args)
     names = tuple(s.strip() for s in args.schemes.split(",")) if args.schemes else scen.compare

@@ -32,10 +32,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _scheme_and_base(args: argparse.Namespace):
     """(scheme name, scheme object, static base Motion, base description)."""
-    from inserr.errors import InputError
-    from inserr.motion import Motion
-    from inserr.schemes import build_scheme
-    from inserr.units import DEG
+    from inserr.core.errors import InputError
+    from inserr.core.units import DEG
+    from inserr.schemes.catalogue import build_scheme
+    from inserr.schemes.vehicle_motion import Motion
 
     if args.scenario is None:
         if args.scheme is None:
@@ -51,8 +51,8 @@ def _scheme_and_base(args: argparse.Namespace):
         scheme = build_scheme(args.scheme, rate * DEG, stop, **opts)
         return args.scheme, scheme, Motion(), "level, heading 0 (body = ENU)"
 
-    from inserr.cli.flags import merge
-    from inserr.scenario import load_scenario, scenario_from_dict
+    from inserr.scenario.flags import merge
+    from inserr.scenario.schema import load_scenario, scenario_from_dict
 
     scen = load_scenario(args.scenario)
     over = {
@@ -80,7 +80,7 @@ def _scheme_and_base(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.cycle import cycle_integrals
+    from inserr.schemes.cycle_integrals import cycle_integrals
 
     name, scheme, base, base_desc = _scheme_and_base(args)
     c = cycle_integrals(scheme, base)

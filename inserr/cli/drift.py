@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from inserr.cli.common import add_json_flag, emit, format_table
-from inserr.cli.flags import add_scenario_flags, scenario_from_args
+from inserr.scenario.flags import add_scenario_flags, scenario_from_args
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -15,7 +15,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.summary import build_report, run_scheme
+    from inserr.drift.study import build_report, run_scheme
 
     scen = scenario_from_args(args)
     r = run_scheme(scen)

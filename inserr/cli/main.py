@@ -12,7 +12,7 @@ import argparse
 import importlib
 import sys
 
-from inserr.errors import InputError
+from inserr.core.errors import InputError
 
 #: command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -31,7 +31,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
 
 
 #: Commands whose ``--out`` is not a report directory replaced as a whole (a sweep's
-#: directory is a resumable store: :func:`inserr.sweep_store.check_sweep_dir`).
+#: directory is a resumable store: :func:`inserr.sweep.store.check_sweep_dir`).
 _OWN_OUT_CHECK = frozenset({"sweep"})
 
 
@@ -74,14 +74,14 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     module = importlib.import_module(COMMANDS[args.command][0])
     if getattr(args, "json", False):
-        from inserr.progress import set_quiet
+        from inserr.output.progress import set_quiet
 
         set_quiet(True)
     try:
         # A report directory is replaced as a whole: refuse a dangerous --out before
         # any work. (A sweep's --out is a resumable store with its own checks.)
         if getattr(args, "out", None) is not None and args.command not in _OWN_OUT_CHECK:
-            from inserr.report import check_report_dir
+            from inserr.output.report import check_report_dir
 
             check_report_dir(args.out)
         return int(module.run(args) or 0)

@@ -6,8 +6,8 @@ import argparse
 import math
 
 from inserr.cli.common import add_json_flag, emit, finite_float, format_table
-from inserr.earth import Site
-from inserr.model import ErrorModel, modes
+from inserr.core.earth import Site
+from inserr.model.psi_model import ErrorModel, modes
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -22,8 +22,8 @@ import argparse
 from pathlib import Path
 
 from inserr.cli.common import add_json_flag, emit, format_table, parse_int
-from inserr.errors import InputError
-from inserr.units import MIL, parse_quantity
+from inserr.core.errors import InputError
+from inserr.core.units import MIL, parse_quantity
 
 HELP = "Rotation-modulation north finder (1 gyro, 1 accel)."
 
@@ -127,7 +127,7 @@ def _setup(args: argparse.Namespace):
     Returns pose, instrument, grade (SI), duration (s), runs, seed and the declared
     hemisphere (+1 north, -1 south).
     """
-    from inserr.northfinder import Instrument, Pose, SensorGrade, n_filter_periods
+    from inserr.northfinder.instrument import Instrument, Pose, SensorGrade, n_filter_periods
 
     v = {
         flag: parse_quantity(
@@ -190,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
         Exit status, 0 (bad input raises InputError, which the CLI turns into 2).
     """
     pose, instrument, grade, duration, runs, seed, hemisphere = _setup(args)
-    from inserr.northfinder_study import monte_carlo
+    from inserr.northfinder.study import monte_carlo
 
     result = monte_carlo(
         pose,
@@ -247,12 +247,12 @@ def _human(s: dict) -> str:
 
 
 def _write_report(out: str, result, summary: dict, args: argparse.Namespace) -> Path:
-    from inserr.northfinder_plots import (
+    from inserr.northfinder.figures import (
         convergence_figure,
         heading_history_figure,
         latitude_history_figure,
     )
-    from inserr.report import Report
+    from inserr.output.report import Report
 
     rep = Report("North finder: Monte Carlo against the Cramér-Rao bound")
     rep.paragraph(

@@ -51,12 +51,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def build_system(args: argparse.Namespace):
-    """The :class:`~inserr.observability.Pwcs` the flags describe."""
+    """The :class:`~inserr.alignment.observability.Pwcs` the flags describe."""
     import numpy as np
 
-    from inserr import observability as ob
-    from inserr.earth import Site
-    from inserr.errors import InputError
+    from inserr.alignment import observability as ob
+    from inserr.core.earth import Site
+    from inserr.core.errors import InputError
 
     site = Site(
         quantity_flag(args.lat, "angle", "--lat", "deg"),
@@ -71,8 +71,8 @@ def build_system(args: argparse.Namespace):
             "a scheme timeline needs the full model",
             "use --model full",
         )
-        from inserr.alignment_study import Base, alignment_timeline
-        from inserr.model import ErrorModel, Layout
+        from inserr.alignment.study import Base, alignment_timeline
+        from inserr.model.psi_model import ErrorModel, Layout
 
         motion = motion_from_args(args)
         rate = quantity_flag(args.rate, "angular_rate", "--rate", "deg/s")
@@ -113,7 +113,7 @@ def build_system(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.observability import TYPICAL, analyze
+    from inserr.alignment.observability import TYPICAL, analyze
 
     system, extra = build_system(args)
     res = analyze(system, extra={**extra, "typical_magnitudes_si": dict(TYPICAL)})

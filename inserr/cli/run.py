@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from inserr.cli.common import add_json_flag, emit, format_table
-from inserr.progress import progress
+from inserr.output.progress import progress
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -16,9 +16,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.report import check_report_dir
-    from inserr.scenario import load_scenario
-    from inserr.summary import build_report, metrics_table, run_scheme
+    from inserr.drift.study import build_report, metrics_table, run_scheme
+    from inserr.output.report import check_report_dir
+    from inserr.scenario.schema import load_scenario
 
     scen = load_scenario(args.scenario)
     out = args.out

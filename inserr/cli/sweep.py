@@ -2,7 +2,7 @@
 
 The base scenario is a scenario file and/or the flags of ``inserr drift``;
 ``--param NAME=V1,V2,...`` (repeatable) names a flag (``stop``, ``gyro-bias``) or a
-dotted scenario key (``scheme.stop``). The value syntax is in :mod:`inserr.sweep`.
+dotted scenario key (``scheme.stop``). The value syntax is in :mod:`inserr.sweep.grid`.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 
 from inserr.cli.common import add_json_flag, emit, format_table, positive_int
-from inserr.cli.flags import add_scenario_flags, scenario_from_args
+from inserr.scenario.flags import add_scenario_flags, scenario_from_args
 
 #: Columns of the terminal table after the parameters (all are in results.csv).
 SHOWN = (
@@ -85,9 +85,9 @@ def run(args: argparse.Namespace) -> int:
     InputError
         Bad scenario or grid, unreachable cluster: before any output is written.
     """
-    from inserr.sweep import build_grid, default_out_dir
-    from inserr.sweep_run import open_engine, run_sweep
-    from inserr.sweep_store import check_sweep_dir
+    from inserr.sweep.grid import build_grid, default_out_dir
+    from inserr.sweep.runner import open_engine, run_sweep
+    from inserr.sweep.store import check_sweep_dir
 
     base = scenario_from_args(args)
     grid = build_grid(base, args.param)

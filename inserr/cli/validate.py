@@ -19,7 +19,7 @@ from inserr.cli.common import (
     positive_float,
     positive_int,
 )
-from inserr.cli.flags import add_scenario_flags, scenario_from_args
+from inserr.scenario.flags import add_scenario_flags, scenario_from_args
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -65,9 +65,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.reference import require_pyins
-    from inserr.units import HOUR
-    from inserr.validation import validate
+    from inserr.core.units import HOUR
+    from inserr.reference.strapdown import require_pyins
+    from inserr.reference.validation import validate
 
     scen = scenario_from_args(args)
     require_pyins()

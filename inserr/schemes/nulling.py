@@ -1,0 +1,399 @@
+"""The nulling two-position rule: indexing that cannot resonate with the vehicle's heading motion.
+
+Why a new rule (``docs/nulling.md`` has the derivation and the evidence). On a
+base that yaws, every constant IMU error leaves, after each turn of the table, a
+small *kick* in the accumulated navigation-frame error integral, and the kick
+depends on the phase of the heading motion at which the turn happens. Two kinds
+matter:
+
+* the *projection* integral ``P(t) = integral of C_s^n dt`` (horizontal rows),
+  which multiplies the biases and the Earth-rate part of the scale-factor and
+  misalignment errors;
+* the *rate-coupled* integrals ``integral of C_s^n K w^s dt`` of the table and
+  vehicle rates; on a tilted vehicle the yaw rate has a component along the
+  IMU x and y axes, and misalignment x yaw rate drives the heading error.
+
+A fixed stop time makes the turn phases a fixed progression
+``phi_k = phi_0 + k alpha`` with ``alpha = 2 pi (Ts + pi / r) / T`` (``T`` the
+period of the heading motion). The kicks form sums ``sum_k s_k F(phi_k)`` whose
+sign pattern ``s_k`` (+-1, the table position, the turn direction) repeats every
+one, two or four turns, so they are geometric series in ``exp(i (nu + m alpha))``
+with ``nu`` in {0, pi/2, pi, 3pi/2} and ``m`` a harmonic of the kick function.
+They grow linearly when ``nu + m alpha = 0 (mod 2 pi)`` (resonance: the
+traditional cycle at 30, 60, 165, 330, 660 s for P0's set-up) and stay bounded
+otherwise, by ``|F_m| / |2 sin((nu + m alpha) / 2)|``.
+
+The rule therefore
+
+1. estimates the period of the heading oscillation from the times at which the
+   yaw rate changes sign (only the past: what a real controller has), and
+2. lengthens every stop by the least amount (less than ``T/2``) that makes the
+   swing phase advance per step a golden section of a half period,
+   ``frac(2 S / T) = 0.382 or 0.618``: then ``2 m S / T`` is never an integer (the
+   sign patterns ``nu = 0, pi``, which carry the strongest kicks, never resonate)
+   and ``nu + m alpha`` stays at least ~21 deg from resonance for every ``nu`` and
+   ``m = 1, 2, 3``, so every accumulated integral stays within a few single-step
+   kicks.
+
+The table follows the mean-zero two-position order ``0 -> +pi -> 0 -> -pi -> 0``
+(turns ``+, -, -, +``): pairs of 180 deg turns cancel the rotation-phase
+projection on a static base, the net table angle stays within +-pi with mean
+zero (so the z-gyro scale factor leaves no mean heading error), and no slip ring
+is needed. Turns are exactly 180 deg and stops last at least ``Ts``, so the
+motor never starts more often than in the traditional cycle. Without heading
+oscillation (static base, steady turn, swing below ``delta``) every stop lasts
+``Ts``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from inserr.core.errors import InputError
+from inserr.core.imu import MISALIGNMENT_INDEX, MISALIGNMENTS
+from inserr.core.rotations import log_so3
+from inserr.schemes.turntable import ScheduleBuilder, TableSchedule
+from inserr.schemes.vehicle_motion import Motion
+
+#: Turn directions of the mean-zero two-position cycle (0, +pi, 0, -pi, 0).
+TURNS = (+1.0, -1.0, -1.0, +1.0)
+#: Target swing-phase advance per step, ``frac(step / period)`` modulo :data:`PHASE_MODULUS`:
+#: the golden sections of a half period, ``frac(2 step / period)`` = 0.382 or 0.618. Then
+#: ``2 m step / period`` is never an integer (no resonance of the sign patterns 0 and pi at
+#: any harmonic m) and ``4 m step / period`` stays at least 0.236 from an integer for
+#: m = 1, 2, 3 (every sign pattern at least 21 deg from resonance).
+PHASE_FRACTIONS = ((3.0 - math.sqrt(5.0)) / 4.0, (math.sqrt(5.0) - 1.0) / 4.0)
+PHASE_MODULUS = 0.5
+#: Yaw-rate history used for the period estimate, in stop times.
+HISTORY_STOPS = 8
+
+
+def yaw_rate_reversals(motion: Motion, duration: float, f: float) -> np.ndarray:
+    """Times at which the vehicle yaw rate changes sign, from samples at ``f`` Hz.
+
+    Each time is the linear interpolation of the zero between two samples of
+    opposite sign, or the middle of a run of exactly-zero samples between them (a
+    hold between opposite turns). The samples are processed an hour at a time to
+    bound memory.
+
+    Parameters
+    ----------
+    motion : Motion
+        Vehicle motion (heading rate, rad/s, clockwise positive).
+    duration : float
+        Length of the run, s.
+    f : float
+        Sampling rate of the yaw rate, Hz.
+
+    Returns
+    -------
+    (K,) ndarray
+        Reversal times, s, sorted and unique.
+    """
+    out = []
+    chunk = 3600.0
+    t0 = 0.0
+    last: tuple[float, float] | None = None  # last non-zero sample (t, rate) seen so far
+    while t0 < duration:
+        t = np.arange(math.ceil(t0 * f), math.floor(min(t0 + chunk, duration) * f) + 1) / f
+        r = motion.heading_rate(t)
+        # A reversal may pass through exact zeros (a hold between opposite turns): look
+        # for sign changes between consecutive NON-ZERO samples, carried across chunks.
+        nz = np.flatnonzero(r != 0.0)
+        tn, rn = t[nz], r[nz]
+        if last is not None:
+            tn, rn = np.concatenate([[last[0]], tn]), np.concatenate([[last[1]], rn])
+        k = np.flatnonzero(np.sign(rn[1:]) * np.sign(rn[:-1]) < 0)
+        adjacent = np.isclose(tn[k + 1] - tn[k], 1.0 / f)
+        # Adjacent samples: the interpolated zero. Across a run of zeros: its middle.
+        cross = np.where(
+            adjacent,
+            tn[k] + rn[k] / (rn[k] - rn[k + 1]) * (tn[k + 1] - tn[k]),
+            0.5 * (tn[k] + tn[k + 1]),
+        )
+        out.append(cross)
+        if len(tn):
+            last = (float(tn[-1]), float(rn[-1]))
+        t0 += chunk
+    x = np.concatenate(out) if out else np.zeros(0)
+    return np.unique(x)
+
+
+def heading_period(reversals: np.ndarray, t: float, history: float) -> float | None:
+    """Period of the heading oscillation seen in the window ``(t - history, t]``.
+
+    Twice the mean spacing of the yaw-rate reversals in the window; at least three
+    reversals are required.
+
+    Parameters
+    ----------
+    reversals : (K,) array
+        Sorted yaw-rate reversal times, s (:func:`yaw_rate_reversals`).
+    t : float
+        End of the window, s.
+    history : float
+        Length of the window, s.
+
+    Returns
+    -------
+    float or None
+        Period, s; None with fewer than three reversals in the window.
+    """
+    lo, hi = np.searchsorted(reversals, [t - history, t], side="right")
+    x = reversals[lo:hi]
+    if len(x) < 3:
+        return None
+    return 2.0 * float(x[-1] - x[0]) / (len(x) - 1)
+
+
+def step_dwell(
+    stop: float, turn_time: float, period: float | None, extension: float
+) -> float | None:
+    """Shortest dwell >= ``stop`` whose step advances the swing phase by the target.
+
+    The target is ``frac(step / period) = x (mod PHASE_MODULUS)`` for ``x`` in
+    :data:`PHASE_FRACTIONS`, whichever needs the shorter dwell; the step is the dwell
+    plus the turn time.
+
+    Parameters
+    ----------
+    stop : float
+        Minimum stop time ``Ts``, s.
+    turn_time : float
+        Duration of the table turn that follows the stop, s.
+    period : float or None
+        Period of the heading oscillation, s (None: no oscillation).
+    extension : float
+        Longest lengthening allowed, s.
+
+    Returns
+    -------
+    float or None
+        The dwell (s); ``stop`` when ``period`` is None; None if the required
+        lengthening exceeds ``extension``.
+    """
+    if period is None:
+        return stop
+    phase = ((stop + turn_time) / period) % PHASE_MODULUS
+    extra = min((x - phase) % PHASE_MODULUS for x in PHASE_FRACTIONS) * period
+    return stop + extra if extra <= extension else None
+
+
+@dataclass(frozen=True)
+class NullingTwoPosition:
+    """Two-position indexing whose stop time keeps every error integral bounded.
+
+    See the module docstring for the rule and ``docs/nulling.md`` for why it works.
+
+    Parameters
+    ----------
+    rate : float
+        Table rate, rad/s; every turn is 180 deg about the outer (azimuth) gimbal.
+    stop : float
+        Minimum stop time ``Ts``, s.
+    mounting : (3, 3) array, optional
+        IMU mounting ``C_s^t`` on the inner gimbal (see
+        :class:`~inserr.schemes.turntable.TableSchedule`).
+    f : float
+        Sampling rate of the yaw rate used to find its reversals, Hz.
+    delta : float
+        Smallest peak-to-peak heading oscillation the rule reacts to, rad; below it
+        every stop lasts ``Ts``.
+    variant : str
+        Only ``"threshold"`` (accepted so that the flexible rule's scenario
+        options apply unchanged).
+    extension : float, optional
+        Longest lengthening of a stop, s (default ``Ts``); when more would be needed
+        (heading periods of several ``Ts``) the stop lasts ``Ts``.
+    name : str
+        Scheme name used in reports.
+    """
+
+    rate: float
+    stop: float
+    mounting: np.ndarray | None = field(default=None, compare=False)
+    f: float = 100.0
+    delta: float = 0.01
+    variant: str = "threshold"
+    extension: float | None = None
+    name: str = "nulling-two-position"
+
+    def __post_init__(self) -> None:
+        if self.variant != "threshold":
+            raise InputError(
+                "scheme.variant",
+                f"{self.variant!r} does not apply to {self.name}",
+                "remove scheme.variant (the nulling rule has no stop-test variants)",
+            )
+        if not (math.isfinite(self.f) and self.f > 0):
+            raise InputError("scheme.decision_rate", f"must be > 0 Hz, got {self.f!r}")
+        if not (math.isfinite(self.delta) and self.delta >= 0):
+            raise InputError("scheme.delta", f"must be >= 0 rad, got {self.delta!r}")
+        ext = self.extension
+        if ext is not None and not (math.isfinite(ext) and ext >= 0):
+            raise InputError("scheme.extension", f"must be >= 0 s, got {ext!r}")
+
+    def _oscillation(self, motion: Motion, reversals: np.ndarray, t: float) -> float | None:
+        """Heading period seen before ``t``, or None if the swing is below ``delta``."""
+        history = HISTORY_STOPS * self.stop
+        # A reversal is known one sample after it happens.
+        period = heading_period(reversals, t - 1.0 / self.f, history)
+        if period is None:
+            return None
+        h = motion.heading_at(np.linspace(max(0.0, t - history), t, 512))
+        return period if float(np.ptp(h)) >= self.delta else None
+
+    def plan(self, motion: Motion, duration: float) -> TableSchedule:
+        """Plan the table schedule the rule produces for a vehicle motion.
+
+        Parameters
+        ----------
+        motion : Motion
+            Vehicle motion (heading in rad, heading rate in rad/s).
+        duration : float
+            Length of the run, s.
+
+        Returns
+        -------
+        TableSchedule
+            Stops and 180 deg outer-gimbal turns; ``meta`` records ``fallbacks``
+            (stops left at ``Ts`` because the period needed more than
+            ``extension``), ``lengthened`` (stops lengthened) and the
+            ``period_estimates_s`` used (one per stop, s, NaN where none).
+        """
+        ts = self.stop
+        turn_time = math.pi / self.rate
+        ext = ts if self.extension is None else self.extension
+        reversals = yaw_rate_reversals(motion, duration, self.f)
+        b = ScheduleBuilder(0.0, 0.0, self.mounting)
+        periods = []
+        fallbacks = lengthened = 0
+        k = 0
+        while b.t < duration:
+            period = self._oscillation(motion, reversals, b.t) if b.t > 0 else None
+            dwell = step_dwell(ts, turn_time, period, ext)
+            if dwell is None:
+                dwell = ts
+                fallbacks += 1
+            lengthened += dwell > ts
+            periods.append(math.nan if period is None else period)
+            b.stop(dwell, f"stop {round(math.degrees(b.a)):+d}")
+            if b.t >= duration:
+                break
+            d = TURNS[k % 4]
+            b.rotate("outer", d * math.pi, self.rate, "turn +180" if d > 0 else "turn -180")
+            k += 1
+        b.meta.update(fallbacks=fallbacks, lengthened=lengthened, period_estimates_s=periods)
+        return b.build()
+
+
+# ---------------------------------------------------------------------------------------
+# The integrals the rule keeps bounded (for tests, reports and diagnosis)
+# ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ErrorIntegrals:
+    """Accumulated navigation-frame gyro error integrals per unit IMU error.
+
+    For a unit error of each source the gyro error rate resolved in n is
+    ``C_s^n b`` (bias) or ``C_s^n K w_is^s`` (scale factor, misalignment; ``w_is``
+    the true IMU rate: Earth + vehicle + table). Its integral is, up to sign
+    (``psi' = -eps^n``), the attitude error it would cause without the Earth-rate
+    and Schuler coupling, so a scheme is good when these stay bounded.
+
+    Attributes
+    ----------
+    t : (M,) ndarray
+        Output times, s.
+    names : tuple of str
+        The N sources ``bias_x``... ``sf_z``, ``mis_xy``... ``mis_zy``.
+    running : (M, N, 3) ndarray
+        Running integral (E, N, U) at each output time: rad per unit error
+        (dimensionless scale factor or rad of misalignment), s for a bias of 1 rad/s.
+    by_phase : dict {"stop", "turn"} -> (N, 3) ndarray
+        Integral over the whole run split by table phase, same units.
+    """
+
+    t: np.ndarray
+    names: tuple[str, ...]
+    running: np.ndarray
+    by_phase: dict
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """Running integral of one source, (M, 3)."""
+        return self.running[:, self.names.index(name)]
+
+
+def _unit_matrices() -> tuple[tuple[str, ...], list[tuple[str, int, int]]]:
+    rows = [(f"bias_{a}", i, -1) for i, a in enumerate("xyz")]
+    rows += [(f"sf_{a}", i, i) for i, a in enumerate("xyz")]
+    rows += [(f"mis_{m}", *MISALIGNMENT_INDEX[m]) for m in MISALIGNMENTS]
+    return tuple(r[0] for r in rows), rows
+
+
+def error_integrals(
+    table: TableSchedule,
+    motion: Motion,
+    earth_rate_n: np.ndarray,
+    duration: float,
+    dt: float = 0.2,
+    t_out: np.ndarray | None = None,
+) -> ErrorIntegrals:
+    """Integrals of the unit gyro error rates over a schedule (midpoint rule, step ``dt``).
+
+    Parameters
+    ----------
+    table : TableSchedule
+        Gimbal-angle history (gives ``C_s^b``).
+    motion : Motion
+        Vehicle motion (gives ``C_b^n``).
+    earth_rate_n : (3,) array
+        Earth rate resolved in ENU, rad/s (``Site.earth_rate_n``).
+    duration : float
+        Length of the run, s.
+    dt : float
+        Integration step, s (0.2 s resolves swings down to ~10 s periods and the
+        6 deg/s turns).
+    t_out : (M,) array, optional
+        Output times, s (default every 60 s).
+
+    Returns
+    -------
+    ErrorIntegrals
+    """
+    names, rows = _unit_matrices()
+    if t_out is None:
+        t_out = np.arange(0.0, duration + 1e-9, 60.0)
+    is_turn = np.array([k != "stop" for k in table.kind])
+    running = np.zeros((len(t_out), len(names), 3))
+    phase = {"stop": np.zeros((len(names), 3)), "turn": np.zeros((len(names), 3))}
+    acc = np.zeros((len(names), 3))
+    chunk = 3600.0
+    start = 0.0
+    h = 1e-3
+    while start < duration:
+        t = np.arange(start, min(start + chunk, duration) - 1e-12, dt) + 0.5 * dt
+        c = motion.attitude(t) @ table.dcm_at(t, motion)
+        c_plus = motion.attitude(t + h) @ table.dcm_at(t + h, motion)
+        c_minus = motion.attitude(t - h) @ table.dcm_at(t - h, motion)
+        w_n = log_so3(c_plus @ np.swapaxes(c_minus, -1, -2)) / (2 * h)
+        w_s = np.einsum("kji,kj->ki", c, w_n + earth_rate_n)
+        seg = np.clip(np.searchsorted(table.t0, t, side="right") - 1, 0, len(table.t0) - 1)
+        turn = is_turn[seg]
+        rates = np.empty((len(t), len(names), 3))
+        for j, (_, axis, col) in enumerate(rows):
+            scale = 1.0 if col < 0 else w_s[:, col : col + 1]
+            rates[:, j] = c[:, :, axis] * scale
+        phase["stop"] += rates[~turn].sum(axis=0) * dt
+        phase["turn"] += rates[turn].sum(axis=0) * dt
+        cum = acc + np.cumsum(rates, axis=0) * dt
+        ends = t + 0.5 * dt
+        sel = (t_out > start - 1e-9) & (t_out <= ends[-1] + 1e-9)
+        pos = np.clip(np.searchsorted(ends, t_out[sel] - 1e-9), 0, len(t) - 1)
+        running[sel] = cum[pos]
+        running[sel & (t_out <= start + 1e-9)] = acc
+        acc = cum[-1]
+        start += chunk
+    return ErrorIntegrals(np.asarray(t_out, float), names, running, phase)

@@ -1,0 +1,336 @@
+"""Vehicle motions at a fixed site: static, yaw swing, constant-rate turn, heading history.
+
+A motion gives the body attitude ``C_b^n(t)`` (body right-front-up, n = ENU) and the
+body angular velocity relative to n, ``w_nb^n(t)`` (rad/s, resolved in n). Only the
+heading moves; pitch and roll are constant and the IMU sits at the centre of
+rotation (no lever arm), so the specific force stays ``[0, 0, g]`` and the
+position stays fixed: a moored ship yawing, a vehicle turning on the spot, a
+swinging-base test stand. Heading is clockwise from north, so a heading rate
+``r`` is the angular velocity ``[0, 0, -r]`` in ENU.
+
+Each motion also says where it is *piecewise constant-rate* (so the schedule can
+use exact single intervals) via :meth:`Motion.pieces`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from inserr.core.errors import InputError, require_finite
+from inserr.core.rotations import body_to_nav
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Base class and static motion: constant pitch and roll, heading ``heading_at(t)``.
+
+    Parameters
+    ----------
+    heading : float, rad
+        Initial heading of the body y (forward) axis, clockwise from north.
+    pitch : float, rad
+        Pitch about body x, nose up positive; within (-pi/2, pi/2).
+    roll : float, rad
+        Roll about body y, right wing down positive.
+
+    Attributes
+    ----------
+    name : str
+        Short label of the motion kind (class attribute: ``"static"`` here).
+    """
+
+    heading: float = 0.0
+    pitch: float = 0.0
+    roll: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("heading", "pitch", "roll"):
+            require_finite(getattr(self, name), name)
+        if abs(self.pitch) >= math.pi / 2:
+            raise InputError("pitch", "must be within (-90, 90) deg")
+
+    name = "static"
+
+    def heading_at(self, t: np.ndarray) -> np.ndarray:
+        """Heading of the body at given times.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, s, from the start of the run.
+
+        Returns
+        -------
+        ndarray, shape of ``t``
+            Heading, rad, clockwise from north (unwrapped).
+        """
+        return np.full(np.shape(t), self.heading, dtype=float)
+
+    def heading_rate(self, t: np.ndarray) -> np.ndarray:
+        """Heading rate of the body at given times.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, s, from the start of the run.
+
+        Returns
+        -------
+        ndarray, shape of ``t``
+            Heading rate, rad/s, clockwise positive.
+        """
+        return np.zeros(np.shape(t))
+
+    @property
+    def tilt(self) -> np.ndarray:
+        """``C_b^n`` (3, 3) at heading 0: every motion here is ``rot_z(-H(t)) @ tilt``."""
+        return body_to_nav(0.0, self.pitch, self.roll)
+
+    def attitude(self, t: np.ndarray) -> np.ndarray:
+        """Body attitude ``C_b^n`` (body right-front-up to ENU) at given times.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, s, from the start of the run.
+
+        Returns
+        -------
+        ndarray, shape (len(t), 3, 3)
+            ``C_b^n``; a scalar ``t`` counts as one time.
+        """
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        return body_to_nav(
+            self.heading_at(t), np.full(t.shape, self.pitch), np.full(t.shape, self.roll)
+        )
+
+    def rate_n(self, t: np.ndarray) -> np.ndarray:
+        """Body angular velocity relative to n, ``w_nb^n = [0, 0, -heading_rate]``.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, s, from the start of the run.
+
+        Returns
+        -------
+        ndarray, shape (len(t), 3)
+            Angular velocity of b relative to n, resolved in ENU, rad/s.
+        """
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        out = np.zeros((len(t), 3))
+        out[:, 2] = -self.heading_rate(t)
+        return out
+
+    def pieces(self, duration: float) -> tuple[np.ndarray, bool]:
+        """Breakpoints of the motion and whether its rate is constant between them.
+
+        Parameters
+        ----------
+        duration : float
+            Length of the run, s.
+
+        Returns
+        -------
+        breaks : ndarray, shape (P,)
+            Increasing times in [0, duration], s, starting at 0 and ending at ``duration``.
+        constant : bool
+            True if the heading rate is constant between consecutive breakpoints (so
+            each piece is one exact constant-rate interval).
+        """
+        return np.array([0.0, duration]), True
+
+    @property
+    def is_static(self) -> bool:
+        """True if the heading never changes."""
+        return True
+
+    def describe(self) -> str:
+        """One-line human description (angles in degrees)."""
+        return (
+            f"static, heading {math.degrees(self.heading):g} deg, "
+            f"pitch {math.degrees(self.pitch):g} deg, "
+            f"roll {math.degrees(self.roll):g} deg"
+        )
+
+
+Static = Motion
+
+
+@dataclass(frozen=True)
+class YawSwing(Motion):
+    """Heading rate ``A cos(2 pi t / T)``: heading ``psi0 + A T / (2 pi) sin(2 pi t / T)``.
+
+    ``psi0`` is the inherited ``heading``; ``pitch`` and ``roll`` as in :class:`Motion`.
+
+    Parameters
+    ----------
+    amplitude : float, rad/s
+        Peak heading rate A (clockwise positive).
+    period : float, s
+        Swing period T, > 0.
+    """
+
+    amplitude: float = 0.0
+    period: float = 60.0
+    name = "yaw-swing"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        require_finite(self.amplitude, "yaw_swing.amplitude")
+        if not (math.isfinite(self.period) and self.period > 0):
+            raise InputError("yaw_swing.period", f"must be > 0 s, got {self.period!r}")
+
+    def heading_at(self, t):
+        """Heading ``psi0 + A T / (2 pi) sin(2 pi t / T)``.
+
+        Arguments, returns and units as :meth:`Motion.heading_at`.
+        """
+        w = 2.0 * math.pi / self.period
+        return self.heading + self.amplitude / w * np.sin(w * np.asarray(t, dtype=float))
+
+    def heading_rate(self, t):
+        """Heading rate ``A cos(2 pi t / T)``.
+
+        Arguments, returns and units as :meth:`Motion.heading_rate`.
+        """
+        w = 2.0 * math.pi / self.period
+        return self.amplitude * np.cos(w * np.asarray(t, dtype=float))
+
+    def pieces(self, duration):
+        """One piece ``[0, duration]``, constant-rate only when the amplitude is zero.
+
+        Arguments, returns and units as :meth:`Motion.pieces`.
+        """
+        return np.array([0.0, duration]), self.amplitude == 0.0
+
+    @property
+    def is_static(self) -> bool:
+        """True if the amplitude is zero."""
+        return self.amplitude == 0.0
+
+    def describe(self):
+        """One-line human description (angles in degrees)."""
+        return (
+            f"yaw swing {math.degrees(self.amplitude):g} deg/s peak, period {self.period:g} s "
+            "(heading amplitude "
+            f"{math.degrees(self.amplitude * self.period / (2 * math.pi)):.3g} deg), "
+            f"pitch {math.degrees(self.pitch):g} deg, roll {math.degrees(self.roll):g} deg"
+        )
+
+
+@dataclass(frozen=True)
+class Turn(Motion):
+    """Constant heading rate (turning on the spot).
+
+    Parameters
+    ----------
+    rate : float, rad/s
+        Heading rate, clockwise positive; ``heading``, ``pitch`` and ``roll`` as in
+        :class:`Motion` (``heading`` is the heading at t = 0).
+    """
+
+    rate: float = 0.0
+    name = "turn"
+
+    def heading_at(self, t):
+        """Heading ``heading + rate * t``.
+
+        Arguments, returns and units as :meth:`Motion.heading_at`.
+        """
+        return self.heading + self.rate * np.asarray(t, dtype=float)
+
+    def heading_rate(self, t):
+        """The constant heading rate.
+
+        Arguments, returns and units as :meth:`Motion.heading_rate`.
+        """
+        return np.full(np.shape(t), self.rate, dtype=float)
+
+    @property
+    def is_static(self) -> bool:
+        """True if the rate is zero."""
+        return self.rate == 0.0
+
+    def describe(self):
+        """One-line human description (angles in degrees)."""
+        return (
+            f"turn at {math.degrees(self.rate):g} deg/s "
+            f"from heading {math.degrees(self.heading):g} deg"
+        )
+
+
+@dataclass(frozen=True)
+class HeadingHistory(Motion):
+    """A user-supplied heading history, linearly interpolated (constant rate between samples).
+
+    Parameters
+    ----------
+    times : (K,) s
+        Sample times, K >= 2, strictly increasing, starting at 0.
+    headings : (K,) rad
+        Heading at each sample, clockwise from north, unwrapped (no 360 deg jumps).
+        ``heading`` is set to ``headings[0]``; ``pitch`` and ``roll`` as in :class:`Motion`.
+    """
+
+    times: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0]))
+    headings: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    name = "heading-history"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        t = np.asarray(self.times, dtype=float)
+        h = np.asarray(self.headings, dtype=float)
+        if t.ndim != 1 or t.shape != h.shape or len(t) < 2:
+            raise InputError(
+                "motion.heading_history", "needs matching time and heading columns (>= 2 rows)"
+            )
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(h))):
+            raise InputError("motion.heading_history", "contains a non-finite value")
+        if t[0] != 0.0 or np.any(np.diff(t) <= 0):
+            raise InputError("motion.heading_history", "times must start at 0 and increase")
+        object.__setattr__(self, "times", t)
+        object.__setattr__(self, "headings", h)
+        object.__setattr__(self, "heading", float(h[0]))
+
+    def heading_at(self, t):
+        """Heading linearly interpolated between samples (held at the ends).
+
+        Arguments, returns and units as :meth:`Motion.heading_at`.
+        """
+        return np.interp(t, self.times, self.headings)
+
+    def heading_rate(self, t):
+        """Heading rate of the sample interval containing each time.
+
+        Arguments, returns and units as :meth:`Motion.heading_rate`.
+        """
+        t = np.asarray(t, dtype=float)
+        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2)
+        return np.diff(self.headings)[k] / np.diff(self.times)[k]
+
+    @property
+    def is_static(self) -> bool:
+        """True if every sampled heading equals the first."""
+        return bool(np.all(self.headings == self.headings[0]))
+
+    def pieces(self, duration):
+        """The sample times inside the run: the rate is constant between them.
+
+        Arguments, returns and units as :meth:`Motion.pieces`.
+        """
+        if duration > self.times[-1] + 1e-9:
+            raise InputError(
+                "motion.heading_history",
+                f"covers {self.times[-1]:g} s but the run lasts {duration:g} s",
+                "extend the history or shorten the run",
+            )
+        inner = self.times[(self.times > 0) & (self.times < duration)]
+        return np.concatenate([[0.0], inner, [duration]]), True
+
+    def describe(self):
+        """One-line human description."""
+        return f"heading history of {len(self.times)} samples over {self.times[-1]:g} s"
