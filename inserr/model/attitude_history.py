@@ -44,11 +44,21 @@ class Pieces:
         frequency). Products of two attitude matrices have twice this.
     still : (P,) bool
         True where ``C_s^n`` is constant (``w_ns^n = 0``): the input is constant there.
+    table : (P, 3, 3) or None
+        Where the history is a vehicle motion seen through a *fixed* turntable, the
+        table's ``C_s^b`` (so ``C_s^n = C_b^n(t) C_s^b``); NaN where the table moves; None
+        when the history has no such structure.
+    vehicle_period : float or None
+        Period of the vehicle attitude ``C_b^n(t)``, s, if it repeats (a yaw swing, a
+        steady turn); with ``table`` it lets the engine integrate the vehicle part once
+        per phase (:meth:`AttitudeHistory.evaluate_vehicle`).
     """
 
     breaks: np.ndarray
     bandwidth: np.ndarray
     still: np.ndarray
+    table: np.ndarray | None = None
+    vehicle_period: float | None = None
 
 
 class AttitudeHistory(Protocol):
@@ -69,6 +79,10 @@ class AttitudeHistory(Protocol):
         ``piece`` (N,) names the piece of each time: a time on a boundary takes the
         rate of the named piece.
         """
+        ...
+
+    def evaluate_vehicle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``C_b^n`` (N, 3, 3) and ``w_nb^n`` (N, 3) of the vehicle alone (if ``table`` is given)."""
         ...
 
 
@@ -106,4 +120,3 @@ class TimelineHistory:
         kx = skew(axis)
         rot = np.eye(3) + np.sin(ang) * kx + (1.0 - np.cos(ang)) * (kx @ kx)
         return rot @ tl.c_sn[k], w
-

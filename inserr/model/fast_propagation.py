@@ -48,6 +48,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from inserr.model.attitude_history import AttitudeHistory, Pieces
 from inserr.model.modal import NavModes
@@ -131,6 +132,9 @@ class SourceSet:
 # ---------------------------------------------------------------------------------------
 # Windows
 # ---------------------------------------------------------------------------------------
+STILL, CACHED, DIRECT = 0, 1, 2
+
+
 @dataclass(frozen=True)
 class Windows:
     """Intervals of smooth attitude, each inside one piece and one coarse output interval.
@@ -142,9 +146,14 @@ class Windows:
     piece : (W,) int
         Piece of the history each window lies in.
     n : (W,) int
-        Chebyshev points of each window (1 where the attitude is constant).
-    still : (W,) bool
-        Constant attitude (closed-form integrals).
+        Chebyshev points of each window.
+    kind : (W,) int
+        :data:`STILL` (constant attitude: closed forms), :data:`CACHED` (table fixed on
+        a periodic vehicle, a whole phase step: the vehicle part is integrated once per
+        phase) or :data:`DIRECT` (attitude sampled at the window's own points).
+    phase : (W,) int
+        Phase index of a cached window (its start is ``phase * step`` modulo the
+        vehicle period), -1 otherwise.
     coarse : (W,) int
         Index ``j`` of the coarse output time ``t_c[j]`` that ends the window's coarse
         interval ``(t_c[j-1], t_c[j]]``.
@@ -154,12 +163,44 @@ class Windows:
     b: np.ndarray
     piece: np.ndarray
     n: np.ndarray
-    still: np.ndarray
+    kind: np.ndarray
+    phase: np.ndarray
     coarse: np.ndarray
 
 
-def make_windows(pieces: Pieces, t_coarse: np.ndarray, fastest_mode: float) -> Windows:
-    """Cut the history at its piece boundaries and the coarse times, then by phase budget.
+def _is_multiple(x: float, y: float) -> bool:
+    q = x / y
+    return round(q) >= 1 and abs(q - round(q)) < 1e-9
+
+
+def phase_step(pieces: Pieces, t_coarse: np.ndarray, dt_fine: float | None, fastest: float):
+    """Step of the phase grid on which the vehicle part is reused, or None.
+
+    The step divides the vehicle period, keeps a window's phase within
+    :data:`~inserr.model.quadrature.MAX_PHASE`, is a multiple of the fine output step
+    (so fine times sit at the same places in every window of a phase) and, where it
+    can, divides the coarse step (so coarse times do not cut phase windows).
+    """
+    period = pieces.vehicle_period
+    if period is None or pieces.table is None:
+        return None
+    fixed = ~np.isnan(pieces.table[:, 0, 0]) & ~pieces.still
+    if not np.any(fixed) or dt_fine is None:
+        return None
+    rate = 2.0 * float(pieces.bandwidth[fixed].max()) + fastest
+    m_min = max(1, int(np.ceil(period * rate / MAX_PHASE)))
+    dt_c = float(t_coarse[1] - t_coarse[0]) if len(t_coarse) > 1 else period
+    fine_ok = [m for m in range(m_min, m_min + 400) if _is_multiple(period / m, dt_fine)]
+    for m in fine_ok:
+        if _is_multiple(dt_c, period / m):
+            return period / m
+    return period / fine_ok[0] if fine_ok else None
+
+
+def make_windows(
+    pieces: Pieces, t_coarse: np.ndarray, fastest_mode: float, step: float | None = None
+) -> Windows:
+    """Cut the history at its piece boundaries, the coarse times and the phase grid.
 
     Parameters
     ----------
@@ -169,65 +210,61 @@ def make_windows(pieces: Pieces, t_coarse: np.ndarray, fastest_mode: float) -> W
         Coarse output times (0 and the end included).
     fastest_mode : float, 1/s
         Largest ``|lambda|`` of the navigation modes (adds to the integrand's phase).
+    step : float, optional
+        Phase step of :func:`phase_step` (None: no reuse of the vehicle part).
 
     Returns
     -------
     Windows
     """
     end = float(pieces.breaks[-1])
-    cuts = np.unique(np.concatenate([pieces.breaks, t_coarse[(t_coarse > 0) & (t_coarse < end)]]))
+    extra = [t_coarse[(t_coarse > 0) & (t_coarse < end)]]
+    if step is not None:
+        extra.append(np.arange(1, int(np.floor(end / step)) + 1) * step)
+    cuts = np.unique(np.concatenate([pieces.breaks, *extra]))
+    cuts = cuts[(cuts >= 0) & (cuts <= end)]
     cuts = cuts[np.concatenate([[True], np.diff(cuts) > MERGE])]
     cuts[-1] = end
     a, b = cuts[:-1], cuts[1:]
     mid = 0.5 * (a + b)
     piece = np.clip(np.searchsorted(pieces.breaks, mid, side="right") - 1, 0, len(pieces.still) - 1)
-    still = pieces.still[piece]
+    kind = np.where(pieces.still[piece], STILL, DIRECT)
+    phase = np.full(len(a), -1)
+    if step is not None:
+        fixed = ~np.isnan(pieces.table[piece, 0, 0]) & (kind == DIRECT)
+        k = np.round(a / step).astype(int)
+        whole = (
+            fixed
+            & (np.abs(a - k * step) < 1e3 * MERGE)
+            & (np.abs(b - (k + 1) * step) < 1e3 * MERGE)
+        )
+        m = int(round(pieces.vehicle_period / step))
+        kind = np.where(whole, CACHED, kind)
+        phase = np.where(whole, k % m, -1)
     # Products of two attitude matrices oscillate at twice the turn rate.
     rate = 2.0 * pieces.bandwidth[piece] + fastest_mode
-    phase = np.where(still, 0.0, rate * (b - a))
-    parts = np.maximum(1, np.ceil(phase / MAX_PHASE)).astype(int)
+    ph = np.where(kind == DIRECT, rate * (b - a), 0.0)
+    parts = np.maximum(1, np.ceil(ph / MAX_PHASE)).astype(int)
     if np.any(parts > 1):
         rep = np.repeat(np.arange(len(a)), parts)
-        k = np.arange(len(rep)) - np.repeat(np.cumsum(parts) - parts, parts)
+        j = np.arange(len(rep)) - np.repeat(np.cumsum(parts) - parts, parts)
         length = (b - a)[rep] / parts[rep]
-        a2 = a[rep] + k * length
-        b2 = np.where(k == parts[rep] - 1, b[rep], a2 + length)
-        a, b, piece, still, phase = a2, b2, piece[rep], still[rep], (phase / parts)[rep]
-    n = np.where(still, 1, points_for(phase))
+        a2 = a[rep] + j * length
+        b2 = np.where(j == parts[rep] - 1, b[rep], a2 + length)
+        a, b, piece, kind, phase, ph = a2, b2, piece[rep], kind[rep], phase[rep], (ph / parts)[rep]
+    n = np.where(kind == DIRECT, points_for(ph), 1)
+    if np.any(kind == CACHED):
+        # One template for every phase: sized by the largest vehicle bandwidth of a stop.
+        fixed = ~np.isnan(pieces.table[:, 0, 0]) & ~pieces.still
+        cached_phase = (2.0 * float(pieces.bandwidth[fixed].max()) + fastest_mode) * step
+        n = np.where(kind == CACHED, points_for(np.array([cached_phase]))[0], n)
     coarse = np.searchsorted(t_coarse, b - MERGE, side="left")
-    return Windows(a, b, piece, n.astype(int), still, coarse)
+    return Windows(a, b, piece, n.astype(int), kind, phase, coarse)
 
 
 # ---------------------------------------------------------------------------------------
-# Nodes and features
+# Features
 # ---------------------------------------------------------------------------------------
-@dataclass
-class _Nodes:
-    """The quadrature nodes of a run of windows (flat, in time order)."""
-
-    t: np.ndarray  # (N,) s
-    weight: np.ndarray  # (N,) Fejér weight * half length (0 for still windows' midpoint)
-    window: np.ndarray  # (N,) index into the chunk's windows
-    first: np.ndarray  # (Wc,) index of each window's first node
-
-
-def _nodes(win: Windows, sl: slice) -> _Nodes:
-    a, b, n = win.a[sl], win.b[sl], win.n[sl]
-    half = 0.5 * (b - a)
-    first = np.concatenate([[0], np.cumsum(n)[:-1]])
-    total = int(n.sum())
-    t = np.empty(total)
-    w = np.empty(total)
-    widx = np.repeat(np.arange(len(a)), n)
-    for m in np.unique(n):
-        sel = np.flatnonzero(n == m)
-        x = chebyshev_points(int(m))
-        pos = first[sel][:, None] + np.arange(m)[None, :]
-        t[pos] = a[sel][:, None] + (x[None, :] + 1.0) * half[sel][:, None]
-        w[pos] = fejer_weights(int(m))[None, :] * half[sel][:, None]
-    return _Nodes(t, w, widx, first)
-
-
 def _features(c: np.ndarray, w_is: np.ndarray, f_s: np.ndarray) -> np.ndarray:
     """(N, 63): ``C[a, i]``, ``C[a, i] w_is[j]``, ``C[a, i] f_s[j]`` (row-major a, i, j)."""
     nn = len(c)
@@ -238,22 +275,88 @@ def _features(c: np.ndarray, w_is: np.ndarray, f_s: np.ndarray) -> np.ndarray:
     return out
 
 
+def vehicle_to_imu(y: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Vehicle features (of ``C_b^n``, ``w^b``, ``f^b``) -> IMU features for a fixed table ``m``.
+
+    With the table at ``C_s^b = M``: ``C = C_b^n M``, ``w_is^s = M^T w^b``,
+    ``f^s = M^T f^b``, so ``C[a, i] = sum_k C_b^n[a, k] M[k, i]`` and
+    ``C[a, i] w^s[j] = sum_kl C_b^n[a, k] w^b[l] M[k, i] M[l, j]``; linear, so it applies
+    to integrals of features as well.
+
+    Parameters
+    ----------
+    y : (..., 63)
+        Vehicle features or their integrals.
+    m : (3, 3) or (..., 3, 3)
+        ``C_s^b`` of the fixed table (broadcast against ``y``'s leading axes).
+
+    Returns
+    -------
+    ndarray (..., 63)
+    """
+    lead = np.broadcast_shapes(y.shape[:-1], m.shape[:-2])
+    mlead = m.shape[:-2]
+    y = np.broadcast_to(y, lead + (N_FEATURES,))
+    # Batch over the table's own leading axes; the rest of y's axes ride along as rows.
+    rows = lead[len(mlead) :] if lead[: len(mlead)] == mlead else None
+    if rows is None:  # pragma: no cover - callers pass m with y's leading axes
+        m = np.broadcast_to(m, lead + (3, 3))
+        mlead, rows = lead, ()
+    nb = int(np.prod(mlead, dtype=int))
+    nr = int(np.prod(rows, dtype=int))
+    yy = y.reshape(nb, nr, N_FEATURES)
+    mm = np.broadcast_to(m, mlead + (3, 3)).reshape(nb, 3, 3)
+    # kron(M, M)[(k, l), (i, j)] = M[k, i] M[l, j]
+    mk = (mm[:, :, None, :, None] * mm[:, None, :, None, :]).reshape(nb, 9, 9)
+    out = np.empty((nb, nr, N_FEATURES), dtype=np.result_type(y, m))
+    # C[a, i] = sum_k C_b^n[a, k] M[k, i]: rows (r, a) times M.
+    out[:, :, :9] = (yy[:, :, :9].reshape(nb, nr * 3, 3) @ mm).reshape(nb, nr, 9)
+    for lo in (9, 36):
+        # C[a, i] x[j] = sum_kl C_b^n[a, k] x^b[l] M[k, i] M[l, j]: rows (r, a) times kron(M, M).
+        blk = yy[:, :, lo : lo + 27].reshape(nb, nr * 3, 9)
+        out[:, :, lo : lo + 27] = (blk @ mk).reshape(nb, nr, 27)
+    return out.reshape(lead + (N_FEATURES,))
+
+
+def signed_coefficients(modes: NavModes, src: SourceSet) -> np.ndarray:
+    """(R, 63): modal input of the signed errors as a linear form in the IMU features."""
+    bg, ba, kg, ka, _ = src.signed()
+    g, acc = modes.gyro_input, modes.accel_input  # (R, 3)
+    out = np.zeros((modes.n_modes, N_FEATURES), dtype=complex)
+    out[:, :9] = (g[:, :, None] * bg[None, None, :] + acc[:, :, None] * ba[None, None, :]).reshape(
+        -1, 9
+    )
+    out[:, 9:36] = (g[:, :, None, None] * kg[None, None]).reshape(-1, 27)
+    out[:, 36:] = (acc[:, :, None, None] * ka[None, None]).reshape(-1, 27)
+    return out
+
+
 def _source_inputs(modes: NavModes, y: np.ndarray, src: SourceSet) -> np.ndarray:
-    """Modal inputs (J, R, N) of every source from feature integrals ``y`` (J, R, 63)."""
+    """Modal inputs (J, R, N) of every source from feature integrals ``y`` (J, R, 63).
+
+    A gyro bias on IMU axis i drives ``psi' = -C e_i``, whose modal input is
+    ``sum_a G[r, a] C[a, i]`` (G = :attr:`NavModes.gyro_input`); a gyro error-matrix
+    entry (i, j) drives ``-C e_i w_is[j]``; accelerometer errors likewise with
+    :attr:`NavModes.accel_input` and ``f^s``.
+    """
     g, acc = modes.gyro_input, modes.accel_input  # (R, 3): n-frame error -> modal input
-    y1 = y[:, :, :9].reshape(len(y), -1, 3, 3)  # [j, r, a, i]
-    y2 = y[:, :, 9:36].reshape(len(y), -1, 3, 3, 3)  # [j, r, a, i, k]
-    y3 = y[:, :, 36:].reshape(len(y), -1, 3, 3, 3)
-    out = np.zeros((len(y), modes.n_modes, src.n), dtype=complex)
-    for s, (kind, i, j) in enumerate(zip(src.imu_kind, src.imu_i, src.imu_j, strict=True)):
-        if kind == 0:
-            out[:, :, s] = np.einsum("ra,jra->jr", g, y1[:, :, :, i])
-        elif kind == 1:
-            out[:, :, s] = np.einsum("ra,jra->jr", acc, y1[:, :, :, i])
-        elif kind == 2:
-            out[:, :, s] = np.einsum("ra,jra->jr", g, y2[:, :, :, i, j])
-        elif kind == 3:
-            out[:, :, s] = np.einsum("ra,jra->jr", acc, y3[:, :, :, i, j])
+    nj, r = y.shape[0], y.shape[1]
+    y1 = y[:, :, :9].reshape(nj, r, 3, 3)  # [j, r, a, i]
+    y2 = y[:, :, 9:36].reshape(nj, r, 3, 9)  # [j, r, a, (i, k)]
+    y3 = y[:, :, 36:].reshape(nj, r, 3, 9)
+    g1 = np.einsum("ra,jrai->jri", g, y1)
+    a1 = np.einsum("ra,jrai->jri", acc, y1)
+    g2 = np.einsum("ra,jrap->jrp", g, y2)
+    a3 = np.einsum("ra,jrap->jrp", acc, y3)
+    table = np.concatenate([g1, a1, g2, a3], axis=2)  # (J, R, 3 + 3 + 9 + 9)
+    col = np.select(
+        [src.imu_kind == 0, src.imu_kind == 1, src.imu_kind == 2, src.imu_kind == 3],
+        [src.imu_i, 3 + src.imu_i, 6 + 3 * src.imu_i + src.imu_j, 15 + 3 * src.imu_i + src.imu_j],
+        default=-1,
+    )
+    out = np.zeros((nj, r, src.n), dtype=complex)
+    imu = col >= 0
+    out[:, :, imu] = table[:, :, col[imu]]
     return out
 
 
@@ -316,8 +419,8 @@ class ConstantErrorResponse:
     t_coarse : (Mc,) s
     coarse : (Mc, 9, N)
         Response to each source (scaled by its value), on the coarse grid.
-    windows : int
-        Quadrature windows used.
+    windows : dict
+        Quadrature windows used, by kind (``still``, ``cached``, ``direct``).
     nodes : int
         Attitude evaluations used.
     """
@@ -326,8 +429,17 @@ class ConstantErrorResponse:
     fine: np.ndarray
     t_coarse: np.ndarray
     coarse: np.ndarray
-    windows: int
+    windows: dict
     nodes: int
+
+
+def _grid_step(t: np.ndarray) -> float | None:
+    """Step of a uniform grid 0, h, 2h, ... (its last point may be shorter), else None."""
+    if len(t) < 2 or t[0] != 0.0:
+        return None
+    h = float(t[1] - t[0])
+    inner = t[:-1] if len(t) > 2 else t
+    return h if np.allclose(np.diff(inner), h, rtol=0, atol=1e-9) else None
 
 
 def constant_error_response(
@@ -357,82 +469,319 @@ def constant_error_response(
     -------
     ConstantErrorResponse
     """
+    # Many small and medium matrix products: a multi-threaded BLAS costs more than it
+    # saves here, and fights with the processes of a sweep.
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _constant_error_response(model, history, sources, t_fine, t_coarse)
+
+
+def _constant_error_response(model, history, sources, t_fine, t_coarse):
     modes = NavModes(model)
     lam = modes.lam
-    r = modes.n_modes
-    site = model.site
-    earth, f_n = site.earth_rate_n, site.specific_force_n
     t_fine = np.asarray(t_fine, dtype=float)
     t_coarse = np.asarray(t_coarse, dtype=float)
-    win = make_windows(history.pieces(), t_coarse, float(np.max(np.abs(lam))))
-    bg, ba, kg, ka, x0 = sources.signed()
-    g_in, a_in = modes.gyro_input, modes.accel_input
+    pieces = history.pieces()
+    fastest = float(np.max(np.abs(lam)))
+    step = phase_step(pieces, t_coarse, _grid_step(t_fine), fastest)
+    win = make_windows(pieces, t_coarse, fastest, step)
+    a_sig = signed_coefficients(modes, sources)
+    run = _Run(modes, history, pieces, win, t_coarse, a_sig, step)
+    run.still_windows()
+    run.cached_windows()
+    run.direct_windows()
+    z0 = modes.to_modes(sources.signed()[4])
+    run.z_end = scan(lam, 0.0, z0, win.b, run.incr)
+    run.z_start = np.concatenate([z0[None], run.z_end[:-1]])
 
-    nw = len(win.a)
-    z_end = np.empty((nw, r), dtype=complex)  # signed state at window ends
-    y_coarse = np.zeros((len(t_coarse), r, N_FEATURES), dtype=complex)
-    fine_idx = np.searchsorted(win.b, t_fine - MERGE, side="left").clip(0, nw - 1)
-    fine_z = np.zeros((len(t_fine), r), dtype=complex)
-    z_prev, t_prev = modes.to_modes(x0), 0.0
-    nodes_used = 0
+    fine_z = np.empty((len(t_fine), modes.n_modes), dtype=complex)
+    at_zero = t_fine <= MERGE
+    fine_z[at_zero] = z0
+    inside = np.flatnonzero(~at_zero)
+    fine_z[inside] = run.fine_states(t_fine[inside], _grid_step(t_fine))
 
-    # Chunks of whole windows, at most CHUNK_NODES nodes each.
-    bounds = [0]
-    csum = np.cumsum(win.n)
-    while bounds[-1] < nw:
-        base = csum[bounds[-1] - 1] if bounds[-1] else 0
-        nxt = int(np.searchsorted(csum, base + CHUNK_NODES, side="right"))
-        bounds.append(max(nxt, bounds[-1] + 1))
-    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-        sl = slice(lo, hi)
-        nd = _nodes(win, sl)
-        nodes_used += len(nd.t)
-        a_w, b_w = win.a[sl], win.b[sl]
-        c, w_ns = history.evaluate(nd.t, win.piece[sl][nd.window])
-        w_is = np.einsum("nji,nj->ni", c, earth + w_ns)  # C^T (Omega + w), IMU frame
-        f_s = np.einsum("nji,j->ni", c, f_n)  # C^T f, IMU frame
-        eps = np.einsum("nij,nj->ni", c, bg + w_is @ kg.T)  # C (b_g + K_g w_is)
-        nab = np.einsum("nij,nj->ni", c, ba + f_s @ ka.T)
-        u = eps @ g_in.T + nab @ a_in.T  # (N, R) modal input of the signed errors
-        still = win.still[sl][nd.window]
-        length = (b_w - a_w)[nd.window]
-        # Integration weights to the window end: Fejér weight * e^{lambda (b - t)}; a still
-        # window's one node carries the closed form int_0^L e^{lambda s} ds = L phi1(lambda L).
-        wt = nd.weight[:, None] * np.exp(lam[None, :] * (b_w[nd.window] - nd.t)[:, None])
-        if np.any(still):
-            ls = length[still][:, None]
-            wt[still] = ls * phi1(lam[None, :] * ls)
-        incr = np.add.reduceat(wt * u, nd.first, axis=0)  # (Wc, R)
-        z_chunk = scan(lam, t_prev, z_prev, b_w, incr)
-        z_end[sl] = z_chunk
-        z_start = np.concatenate([z_prev[None], z_chunk[:-1]])
-        z_prev, t_prev = z_chunk[-1], float(b_w[-1])
-
-        # Per-source feature integrals, propagated to the end of their coarse interval.
-        feats = _features(c, w_is, f_s)
-        cj = win.coarse[sl][nd.window]
-        to_coarse = np.exp(lam[None, :] * (t_coarse[cj] - b_w[nd.window])[:, None])
-        _accumulate(y_coarse, cj, wt * to_coarse, feats)
-
-        # Fine output times inside this chunk's windows.
-        fsel = np.flatnonzero((fine_idx >= lo) & (fine_idx < hi) & (t_fine > MERGE))
-        if len(fsel):
-            fine_z[fsel] = _fine_states(
-                lam, win, lo, nd, u, z_start, t_fine[fsel], fine_idx[fsel]
-            )
-    nc = len(t_coarse)
-    z0 = modes.to_modes(x0)
-    fine_z[t_fine <= MERGE] = z0
-    # Per source: inputs per coarse interval, then the scan over coarse intervals.
+    # Per source: modal inputs per coarse interval, then the scan over coarse intervals.
     z_src0 = modes.to_modes(sources.x0, axis=0)  # (R, N)
-    inputs = _source_inputs(modes, y_coarse[1:], sources)  # (Mc-1, R, N)
-    coarse_z = np.empty((nc, r, sources.n), dtype=complex)
+    coarse_z = np.empty((len(t_coarse), modes.n_modes, sources.n), dtype=complex)
     coarse_z[0] = z_src0
-    if nc > 1:
+    if len(t_coarse) > 1:
+        inputs = _source_inputs(modes, run.y_coarse[1:], sources)
         coarse_z[1:] = scan(lam, float(t_coarse[0]), z_src0, t_coarse[1:], inputs)
     fine = modes.to_nav(fine_z)
     coarse = modes.to_nav(coarse_z * sources.value[None, None, :], axis=1)
-    return ConstantErrorResponse(t_fine, fine, t_coarse, coarse, nw, nodes_used)
+    counts = {
+        name: int(np.count_nonzero(win.kind == k))
+        for name, k in (("still", STILL), ("cached", CACHED), ("direct", DIRECT))
+    }
+    return ConstantErrorResponse(t_fine, fine, t_coarse, coarse, counts, run.nodes)
+
+
+class _Run:
+    """Working state of one :func:`constant_error_response` call (windows by kind)."""
+
+    def __init__(self, modes, history, pieces, win, t_coarse, a_sig, step):
+        self.modes, self.history, self.pieces, self.win = modes, history, pieces, win
+        self.t_coarse, self.a_sig, self.step = t_coarse, a_sig, step
+        self.lam = modes.lam
+        site = modes.model.site
+        self.earth, self.f_n = site.earth_rate_n, site.specific_force_n
+        nw, r = len(win.a), modes.n_modes
+        self.incr = np.zeros((nw, r), dtype=complex)  # signed increment to each window's end
+        self.y_coarse = np.zeros((len(t_coarse), r, N_FEATURES), dtype=complex)
+        self.u_still = np.zeros((nw, r), dtype=complex)  # constant input of still windows
+        self.direct_u: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self.cached_fine = None
+        self.nodes = 0
+
+    # --- attitude at nodes ---------------------------------------------------------
+    def _imu_features(self, t, piece):
+        c, w_ns = self.history.evaluate(t, piece)
+        self.nodes += len(t)
+        w_is = np.einsum("nji,nj->ni", c, self.earth + w_ns)  # C^T (Omega + w): IMU frame
+        f_s = np.einsum("nji,j->ni", c, self.f_n)  # C^T f: IMU frame
+        return _features(c, w_is, f_s)
+
+    def _to_coarse(self, b: np.ndarray, j: np.ndarray) -> np.ndarray:
+        """``e^{lambda (t_c[j] - b)}``: propagation from a window end to its coarse time."""
+        return np.exp(self.lam[None, :] * (self.t_coarse[j] - b)[:, None])
+
+    # --- still windows: constant attitude, closed forms ---------------------------------
+    def still_windows(self) -> None:
+        win = self.win
+        idx = np.flatnonzero(win.kind == STILL)
+        if not len(idx):
+            return
+        length = win.b[idx] - win.a[idx]
+        feats = self._imu_features(0.5 * (win.a[idx] + win.b[idx]), win.piece[idx])
+        wt = length[:, None] * phi1(self.lam[None, :] * length[:, None])  # int_0^L e^{lambda s}
+        u = _apply_form(feats, self.a_sig)
+        self.u_still[idx] = u
+        self.incr[idx] = wt * u
+        w = wt * self._to_coarse(win.b[idx], win.coarse[idx])
+        jj, sums = _group_sum(win.coarse[idx], w[:, :, None] * feats[:, None, :])
+        self.y_coarse[jj] += sums
+
+    # --- cached windows: table fixed, vehicle periodic --------------------------------
+    def cached_windows(self) -> None:
+        win, step, lam = self.win, self.step, self.lam
+        idx = np.flatnonzero(win.kind == CACHED)
+        if not len(idx):
+            return
+        n = int(win.n[idx[0]])
+        m = int(round(self.pieces.vehicle_period / step))
+        x = chebyshev_points(n)
+        s = (x + 1.0) * 0.5 * step  # node offsets in a window
+        t = (np.arange(m)[:, None] * step + s[None, :]).ravel()
+        c_bn, w_nb = self.history.evaluate_vehicle(t)
+        self.nodes += len(t)
+        w_b = np.einsum("nji,nj->ni", c_bn, self.earth + w_nb)
+        f_b = np.einsum("nji,j->ni", c_bn, self.f_n)
+        fv = _features(c_bn, w_b, f_b).reshape(m, n, N_FEATURES)
+        weight = fejer_weights(n) * 0.5 * step
+        # Integral over a window of phase p to its end: sum_q w_q e^{lambda (step - s_q)} F_pq.
+        wend = weight[:, None] * np.exp(lam[None, :] * (step - s)[:, None])  # (n, R)
+        y_phase = np.einsum("qr,pqf->prf", wend, fv)  # (m, R, 63), vehicle features
+        self.cached_template = (n, s, fv)
+
+        # The table matrix of each cached window's piece; group equal tables (per piece).
+        pieces = np.unique(win.piece[idx])
+        keys = np.round(self.pieces.table[pieces].reshape(len(pieces), 9), 12)
+        uniq, inv_piece = np.unique(keys, axis=0, return_inverse=True)
+        table_of_piece = np.full(len(self.pieces.still), -1)
+        table_of_piece[pieces] = inv_piece.reshape(-1)
+        inv = table_of_piece[win.piece[idx]]
+        mats = uniq.reshape(-1, 3, 3)
+        nt = len(mats)
+        # Signed input as a linear form in the vehicle features, per table: A_M.
+        forms = _vehicle_forms(self.a_sig, mats)  # (T, R, 63)
+        # Signed increment of every (table, phase): per mode one (m, 63) @ (63, T) product.
+        inc_tp = np.empty((m, nt, len(lam)), dtype=complex)
+        for r in range(len(lam)):
+            inc_tp[:, :, r] = y_phase[:, r, :] @ forms[:, r, :].T
+        ph = win.phase[idx]
+        self.incr[idx] = inc_tp[ph, inv]
+        # Per source: the windows of one (coarse interval, table) pair add up to
+        # sum_p c[pair, p, r] y_phase[p, r, :], with c the summed propagation factors
+        # e^{lambda (t_c - b)} of the pair's windows of phase p; then one transform per pair.
+        j = win.coarse[idx]
+        w = self._to_coarse(win.b[idx], j)  # (K, R)
+        pairs, pair_of = np.unique(j * nt + inv, return_inverse=True)
+        cell = pair_of.reshape(-1) * m + ph
+        size = len(pairs) * m
+        coef = np.empty((size, len(lam)), dtype=complex)
+        for r in range(len(lam)):
+            coef[:, r] = np.bincount(cell, w[:, r].real, size) + 1j * np.bincount(
+                cell, w[:, r].imag, size
+            )
+        coef = coef.reshape(len(pairs), m, len(lam))
+        sums = np.empty((len(pairs), len(lam), N_FEATURES), dtype=complex)
+        for r in range(len(lam)):
+            sums[:, r, :] = coef[:, :, r] @ y_phase[:, r, :]
+        acc_imu = vehicle_to_imu(sums, mats[pairs % nt][:, None])
+        jj, sums_j = _group_sum(pairs // nt, acc_imu)
+        self.y_coarse[jj] += sums_j
+        self.cached_forms = forms
+        self.cached_table = np.full(len(win.a), -1)
+        self.cached_table[idx] = inv
+
+    # --- direct windows: attitude sampled at each window's points ----------------------
+    def direct_windows(self) -> None:
+        win, lam = self.win, self.lam
+        idx = np.flatnonzero(win.kind == DIRECT)
+        if not len(idx):
+            return
+        # Node times and signed inputs of every direct window, kept for the fine outputs.
+        self.direct_first = np.full(len(win.a), -1)
+        self.direct_first[idx] = np.concatenate([[0], np.cumsum(win.n[idx])[:-1]])
+        total = int(win.n[idx].sum())
+        self.direct_t = np.empty(total)
+        self.direct_u = np.empty((total, len(lam)), dtype=complex)
+        csum = np.cumsum(win.n[idx])
+        lo = 0
+        while lo < len(idx):
+            base = csum[lo - 1] if lo else 0
+            hi = max(int(np.searchsorted(csum, base + CHUNK_NODES, side="right")), lo + 1)
+            sel = idx[lo:hi]
+            nd = _nodes(win, sel)
+            feats = self._imu_features(nd.t, win.piece[sel][nd.window])
+            u = _apply_form(feats, self.a_sig)  # (N, R)
+            b_w = win.b[sel][nd.window]
+            wt = nd.weight[:, None] * np.exp(lam[None, :] * (b_w - nd.t)[:, None])
+            self.incr[sel] = np.add.reduceat(wt * u, nd.first, axis=0)
+            cj = win.coarse[sel][nd.window]
+            _accumulate(self.y_coarse, cj, wt * self._to_coarse(b_w, cj), feats)
+            self.direct_t[base : base + len(nd.t)] = nd.t
+            self.direct_u[base : base + len(nd.t)] = u
+            lo = hi
+
+    # --- fine output times --------------------------------------------------------------
+    def fine_states(self, t: np.ndarray, dt_fine: float | None) -> np.ndarray:
+        win, lam = self.win, self.lam
+        w = np.searchsorted(win.b, t - MERGE, side="left").clip(0, len(win.b) - 1)
+        dt = t - win.a[w]
+        out = np.empty((len(t), len(lam)), dtype=complex)
+        kind = win.kind[w]
+        s = np.flatnonzero(kind == STILL)
+        if len(s):
+            e = np.exp(lam[None, :] * dt[s, None])
+            out[s] = e * self.z_start[w[s]]
+            out[s] += dt[s, None] * phi1(lam[None, :] * dt[s, None]) * self.u_still[w[s]]
+        c = np.flatnonzero(kind == CACHED)
+        if len(c):
+            # Fine times sit at the same offsets in every cached window: a table of e^{lambda dt}.
+            pos = np.clip(np.round(dt[c] / dt_fine).astype(int) - 1, 0, None)
+            nf = int(round(self.step / dt_fine))
+            e = np.exp(lam[None, :] * (np.arange(1, nf + 1) * dt_fine)[:, None])[pos]
+            out[c] = e * (self.z_start[w[c]] + self._cached_integrals(w[c], pos, dt_fine))
+        d = np.flatnonzero(kind == DIRECT)
+        if len(d):
+            e = np.exp(lam[None, :] * dt[d, None])
+            out[d] = e * (self.z_start[w[d]] + self._direct_integrals(w[d], dt[d]))
+        return out
+
+    def _cached_integrals(self, w: np.ndarray, pos: np.ndarray, dt_fine: float) -> np.ndarray:
+        """``int_a^t e^{-lambda (s - a)} u(s) ds`` at the fine times (offset ``pos``) of cached windows."""
+        n, s_nodes, fv = self.cached_template
+        step, lam = self.step, self.lam
+        nf = int(round(step / dt_fine))
+        xf = (np.arange(1, nf + 1) * dt_fine) / (0.5 * step) - 1.0
+        jmat = integral_of_series(xf, n) @ coefficient_matrix(n) * (0.5 * step)  # (nf, n)
+        g = np.exp(-lam[None, :] * s_nodes[:, None])  # (n, R)
+        forms = self.cached_forms  # (T, R, 63)
+        m = fv.shape[0]
+        vals = np.empty((m, nf, len(forms), len(lam)), dtype=complex)
+        for r in range(len(lam)):
+            # H[p, f, feat] = sum_q J[f, q] e^{-lambda_r s_q} F_pq[feat]; then the forms of
+            # every table: one (m nf, 63) @ (63, T) product per mode.
+            h = np.einsum("fq,pqv->pfv", jmat * g[None, :, r], fv).reshape(m * nf, -1)
+            vals[:, :, :, r] = (
+                _apply_form(h.real, forms[:, r, :]) + 1j * _apply_form(h.imag, forms[:, r, :])
+            ).reshape(m, nf, -1)
+        return vals[self.win.phase[w], pos, self.cached_table[w]]
+
+    def _direct_integrals(self, w: np.ndarray, dt: np.ndarray) -> np.ndarray:
+        """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine times of direct windows."""
+        win, lam = self.win, self.lam
+        out = np.zeros((len(w), len(lam)), dtype=complex)
+        n_w = win.n[w]
+        for m in np.unique(n_w):
+            sel = np.flatnonzero(n_w == m)
+            wins, inverse = np.unique(w[sel], return_inverse=True)
+            node = self.direct_first[wins][:, None] + np.arange(m)[None, :]  # (Wm, m)
+            shift = self.direct_t[node] - win.a[wins][:, None]
+            g = self.direct_u[node] * np.exp(-lam[None, None, :] * shift[..., None])
+            # Chebyshev coefficients of g per window: one (m, m) @ (m, Wm R) product.
+            coef = np.tensordot(coefficient_matrix(int(m)), g, axes=([1], [1]))  # (m, Wm, R)
+            half = 0.5 * (win.b[w[sel]] - win.a[w[sel]])
+            ints = integral_of_series(dt[sel] / half - 1.0, int(m))  # (F, m)
+            inv = inverse.reshape(-1)
+            acc = np.zeros((len(sel), len(lam)), dtype=complex)
+            for k in range(int(m)):
+                acc += ints[:, k, None] * coef[k][inv]
+            out[sel] = half[:, None] * acc
+        return out
+
+
+def _vehicle_forms(a_sig: np.ndarray, mats: np.ndarray) -> np.ndarray:
+    """(T, R, 63): the signed input as a linear form in the vehicle features, per table.
+
+    ``u = sum_f A[r, f] F_imu[f]`` and ``F_imu = vehicle_to_imu(F_veh, M)``; the form on
+    the vehicle features is the transpose map applied to ``A``:
+    ``A_M[r, (a, k)] = sum_i A[r, (a, i)] M[k, i]`` and likewise with ``M kron M``.
+    """
+    t = len(mats)
+    r = a_sig.shape[0]
+    out = np.empty((t, r, N_FEATURES), dtype=complex)
+    a1 = a_sig[:, :9].reshape(r, 3, 3)
+    out[:, :, :9] = np.einsum("rai,tki->trak", a1, mats).reshape(t, r, 9)
+    for lo in (9, 36):
+        a2 = a_sig[:, lo : lo + 27].reshape(r, 3, 3, 3)
+        tmp = np.einsum("raij,tlj->trail", a2, mats)
+        out[:, :, lo : lo + 27] = np.einsum("trail,tki->trakl", tmp, mats).reshape(t, r, 27)
+    return out
+
+
+def _nodes(win: Windows, sel: np.ndarray) -> _Nodes:
+    """Chebyshev nodes and Fejér weights of windows ``sel`` (flat, in window order)."""
+    a, b, n = win.a[sel], win.b[sel], win.n[sel]
+    half = 0.5 * (b - a)
+    first = np.concatenate([[0], np.cumsum(n)[:-1]])
+    total = int(n.sum())
+    t = np.empty(total)
+    w = np.empty(total)
+    widx = np.repeat(np.arange(len(a)), n)
+    for m in np.unique(n):
+        s = np.flatnonzero(n == m)
+        x = chebyshev_points(int(m))
+        pos = first[s][:, None] + np.arange(m)[None, :]
+        t[pos] = a[s][:, None] + (x[None, :] + 1.0) * half[s][:, None]
+        w[pos] = fejer_weights(int(m))[None, :] * half[s][:, None]
+    return _Nodes(t, w, widx, first)
+
+
+@dataclass
+class _Nodes:
+    """The quadrature nodes of a set of windows (flat, in window order)."""
+
+    t: np.ndarray  # (N,) s
+    weight: np.ndarray  # (N,) Fejér weight * half length
+    window: np.ndarray  # (N,) position of the node's window in the set
+    first: np.ndarray  # (W,) index of each window's first node
+
+
+def _apply_form(feats: np.ndarray, form: np.ndarray) -> np.ndarray:
+    """``feats @ form.T`` for real features and a complex form (two real products)."""
+    return feats @ form.real.T + 1j * (feats @ form.imag.T)
+
+
+def _group_sum(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sums of ``values`` rows with equal ``keys``: (unique keys, sums)."""
+    if len(keys) > 1 and np.all(keys[1:] >= keys[:-1]):
+        k, v = keys, values  # already grouped (the common case): no sort, no copy
+    else:
+        order = np.argsort(keys, kind="stable")
+        k, v = keys[order], values[order]
+    start = np.flatnonzero(np.concatenate([[True], k[1:] != k[:-1]]))
+    return k[start], np.add.reduceat(v, start, axis=0)
 
 
 def _accumulate(y: np.ndarray, cj: np.ndarray, wt: np.ndarray, feats: np.ndarray) -> None:
@@ -449,48 +798,6 @@ def _accumulate(y: np.ndarray, cj: np.ndarray, wt: np.ndarray, feats: np.ndarray
     fpad[run, pos] = feats
     wt_t = np.swapaxes(wpad, 1, 2)
     y[cj[start]] += np.matmul(wt_t.real, fpad) + 1j * np.matmul(wt_t.imag, fpad)
-
-
-def _fine_states(
-    lam: np.ndarray,
-    win: Windows,
-    lo: int,
-    nd: _Nodes,
-    u: np.ndarray,
-    z_start: np.ndarray,
-    t: np.ndarray,
-    widx: np.ndarray,
-) -> np.ndarray:
-    """Signed modal states at times ``t`` inside windows ``widx`` (global indices)."""
-    k = widx - lo
-    a = win.a[widx]
-    dt = t - a
-    out = np.exp(lam[None, :] * dt[:, None]) * z_start[k]
-    still = win.still[widx]
-    if np.any(still):
-        s = np.flatnonzero(still)
-        node = nd.first[k[s]]
-        out[s] += dt[s, None] * phi1(lam[None, :] * dt[s, None]) * u[node]
-    moving = np.flatnonzero(~still)
-    if len(moving):
-        # int_a^t e^{lambda (t - s)} u(s) ds = e^{lambda (t-a)} int_a^t e^{-lambda (s-a)} u(s) ds:
-        # the Chebyshev series of g(s) = e^{-lambda (s - a)} u(s) on each window, integrated
-        # term by term to the output times.
-        n_w = win.n[widx[moving]]
-        half = 0.5 * (win.b[widx[moving]] - a[moving])
-        x = dt[moving] / half - 1.0
-        acc = np.zeros((len(moving), len(lam)), dtype=complex)
-        for m in np.unique(n_w):
-            sel = np.flatnonzero(n_w == m)
-            wins, inverse = np.unique(k[moving[sel]], return_inverse=True)
-            idx = nd.first[wins][:, None] + np.arange(m)[None, :]  # (Wm, m) node indices
-            a_w = win.a[lo + wins]
-            g = u[idx] * np.exp(-lam[None, None, :] * (nd.t[idx] - a_w[:, None])[..., None])
-            coef = np.einsum("kq,wqr->wkr", coefficient_matrix(int(m)), g)  # per window
-            ints = integral_of_series(x[sel], int(m))  # (F, m)
-            acc[sel] = half[sel][:, None] * np.einsum("fk,fkr->fr", ints, coef[inverse])
-        out[moving] += np.exp(lam[None, :] * dt[moving, None]) * acc
-    return out
 
 
 # ---------------------------------------------------------------------------------------

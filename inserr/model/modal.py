@@ -78,9 +78,7 @@ class NavModes:
         fa = f[np.ix_(active, active)]
         # Physical scaling: psi * R and dv / w_s have the unit and size of dr.
         ws = math.sqrt(site.g / site.mean_radius)
-        scale_all = np.concatenate(
-            [np.full(3, site.mean_radius), np.full(3, 1.0 / ws), np.ones(3)]
-        )
+        scale_all = np.concatenate([np.full(3, site.mean_radius), np.full(3, 1.0 / ws), np.ones(3)])
         d = scale_all[active]
         fs = (d[:, None] * fa) / d[None, :]
         lam, w = np.linalg.eig(fs)
@@ -139,8 +137,10 @@ class NavModes:
         ndarray (real)
             psi (rad), dv (m/s), dr (m), ENU, along ``axis``.
         """
-        zz = np.moveaxis(np.asarray(z), axis, -1) * self.weight
-        x = (zz @ self.out.T).real
+        zz = np.ascontiguousarray(np.moveaxis(np.asarray(z), axis, -1))
+        vw = self.out * self.weight[None, :]  # (9, R)
+        # Re(z w V^T) as two real products (complex matmul of a strided view is slow).
+        x = zz.real @ vw.real.T - zz.imag @ vw.imag.T
         return np.moveaxis(x, -1, axis)
 
     def to_modes(self, x: np.ndarray, axis: int = -1) -> np.ndarray:

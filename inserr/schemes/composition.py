@@ -189,7 +189,18 @@ class ScheduleHistory:
             rate = np.abs(self._isolation_rate(t.ravel(), np.repeat(k[iso], len(frac))))
             gimbal[iso] = 1.5 * rate.reshape(len(iso), -1).max(axis=1) + vehicle[iso]
         still = (kind == "stop") & (vehicle == 0.0)
-        return Pieces(self._breaks, vehicle + gimbal, still)
+        stop = kind == "stop"
+        table = np.full((len(k), 3, 3), np.nan)
+        if np.any(stop):
+            table[stop] = table_dcm(
+                self.table.a0[k[stop]], self.table.b0[k[stop]], self.table.mounting
+            )
+        return Pieces(self._breaks, vehicle + gimbal, still, table, self.motion.repeat_period())
+
+    def evaluate_vehicle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``C_b^n`` (N, 3, 3) and ``w_nb^n`` (N, 3, rad/s, ENU) of the vehicle at times ``t``."""
+        t = np.asarray(t, dtype=float)
+        return _rot_z(-self.motion.heading_at(t)) @ self.motion.tilt, self.motion.rate_n(t)
 
     def evaluate(self, t: np.ndarray, piece: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``C_s^n`` (N, 3, 3) and ``w_ns^n`` (N, 3, rad/s, ENU) at times ``t`` of ``piece``."""
@@ -197,10 +208,12 @@ class ScheduleHistory:
         k = self._segment[np.asarray(piece)]
         tab = self.table
         # Heading-only vehicle motion: C_b^n = rot_z(-H) C_tilt (two sines per time).
-        c_bn = rot_z(-self.motion.heading_at(t)) @ self.motion.tilt
+        c_bn = _rot_z(-self.motion.heading_at(t)) @ self.motion.tilt
         w_nb = self.motion.rate_n(t)
         a, b = tab.angles_at(t, self.motion)
-        c_sb = rot_z(a) if tab.mounting is None and not np.any(b) else table_dcm(a, b, tab.mounting)
+        c_sb = (
+            _rot_z(a) if tab.mounting is None and not np.any(b) else table_dcm(a, b, tab.mounting)
+        )
         kind = np.array(tab.kind)[k]
         outer = np.array([g == "outer" for g in tab.gimbal])[k]
         rate = np.where(kind == "rotate", tab.rate[k], 0.0)
@@ -236,3 +249,15 @@ class ScheduleHistory:
             return (v[:, 1] * dv[:, 0] - v[:, 0] * dv[:, 1]) / den
 
         return (tab.target_rate[k] - dpsi(dv_dt)) / dpsi(dv_da)
+
+
+def _rot_z(angle: np.ndarray) -> np.ndarray:
+    """:func:`inserr.core.rotations.rot_z` for many angles, built from one sine and cosine each."""
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros(np.shape(angle) + (3, 3))
+    out[..., 0, 0] = c
+    out[..., 0, 1] = -s
+    out[..., 1, 0] = s
+    out[..., 1, 1] = c
+    out[..., 2, 2] = 1.0
+    return out

@@ -167,6 +167,14 @@ class Motion:
         """
         return np.zeros(np.shape(a))
 
+    def repeat_period(self) -> float | None:
+        """Period after which the body attitude repeats exactly, s (None if it never does).
+
+        The fast engine reuses its quadrature of the vehicle part from one period to
+        the next. A static base returns None (its attitude is constant: nothing to reuse).
+        """
+        return None
+
     def describe(self) -> str:
         """One-line human description (angles in degrees)."""
         return (
@@ -240,6 +248,13 @@ class YawSwing(Motion):
             return np.zeros(np.shape(a))
         return np.full(np.shape(a), abs(self.amplitude) + 2.0 * math.pi / self.period)
 
+    def repeat_period(self):
+        """The swing period (None without swing).
+
+        Arguments, returns and units as :meth:`Motion.repeat_period`.
+        """
+        return float(self.period) if self.amplitude != 0.0 else None
+
     def describe(self):
         """One-line human description (angles in degrees)."""
         return (
@@ -289,6 +304,13 @@ class Turn(Motion):
         Arguments, returns and units as :meth:`Motion.rate_bound`.
         """
         return np.full(np.shape(a), abs(self.rate))
+
+    def repeat_period(self):
+        """One full turn, ``2 pi / |rate|`` (None without turning).
+
+        Arguments, returns and units as :meth:`Motion.repeat_period`.
+        """
+        return 2.0 * math.pi / abs(self.rate) if self.rate != 0.0 else None
 
     def describe(self):
         """One-line human description (angles in degrees)."""
