@@ -82,7 +82,7 @@ class AttitudeHistory(Protocol):
         ...
 
     def evaluate_vehicle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``C_b^n`` (N, 3, 3) and ``w_nb^n`` (N, 3) of the vehicle alone (if ``table`` is given)."""
+        """``C_b^n`` (N, 3, 3) and ``w_nb^n`` (N, 3) of the vehicle alone (with ``table``)."""
         ...
 
 

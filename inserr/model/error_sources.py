@@ -181,7 +181,7 @@ def source_matrix(model: ErrorModel, sources: list[Source], c_sn0: np.ndarray) -
 
 
 def source_set(model: ErrorModel, sources: list[Source]):
-    """The sources as :class:`~inserr.model.fast_propagation.SourceSet` (IMU inputs, initial states).
+    """The sources as a :class:`~inserr.model.fast_propagation.SourceSet`.
 
     Parameters
     ----------

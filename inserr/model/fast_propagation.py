@@ -679,7 +679,7 @@ class _Run:
         return out
 
     def _cached_integrals(self, w: np.ndarray, pos: np.ndarray, dt_fine: float) -> np.ndarray:
-        """``int_a^t e^{-lambda (s - a)} u(s) ds`` at the fine times (offset ``pos``) of cached windows."""
+        """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine offsets ``pos`` of cached windows."""
         n, s_nodes, fv = self.cached_template
         step, lam = self.step, self.lam
         nf = int(round(step / dt_fine))

@@ -197,6 +197,14 @@ class ScheduleHistory:
             )
         return Pieces(self._breaks, vehicle + gimbal, still, table, self.motion.repeat_period())
 
+    def timeline(self, substep: float = 1.0) -> Timeline:
+        """The same history as a :class:`~inserr.model.timeline.Timeline` (:func:`build_timeline`).
+
+        Continuous motion is cut into ``substep``-second sub-steps of constant rate: the
+        model of the step-by-step engine, exact for stops and turns on a still vehicle.
+        """
+        return build_timeline(self.table, self.motion, self._duration, substep)
+
     def evaluate_vehicle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``C_b^n`` (N, 3, 3) and ``w_nb^n`` (N, 3, rad/s, ENU) of the vehicle at times ``t``."""
         t = np.asarray(t, dtype=float)
