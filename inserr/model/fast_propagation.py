@@ -58,12 +58,15 @@ from inserr.model.quadrature import (
     chebyshev_points,
     fejer_weights,
     integral_of_series,
+    integration_matrix,
     points_for,
 )
 from inserr.model.quadrature import _coefficient_matrix as coefficient_matrix
 
 #: Nodes evaluated at once (bounds memory: ~63 features and R modal weights per node).
 CHUNK_NODES = 40_000
+#: Fine output times evaluated at once (bounds memory on long runs).
+CHUNK_FINE = 200_000
 #: Largest |Re lambda| * time span of one scan block (keeps exp() within float range).
 SCAN_SPAN = 200.0
 #: Window boundaries closer than this (s) are merged.
@@ -76,9 +79,46 @@ N_FEATURES = 63
 def phi1(z: np.ndarray) -> np.ndarray:
     """``(e^z - 1) / z`` (1 at z = 0), accurate for small and complex ``z``."""
     z = np.asarray(z)
-    small = z == 0
-    out = np.expm1(np.where(small, 1.0, z)) / np.where(small, 1.0, z)
-    return np.where(small, 1.0, out)
+    zero = z == 0
+    if not np.any(zero):
+        return np.expm1(z) / z
+    zz = np.where(zero, 1.0, z)
+    out = np.expm1(zz) / zz
+    out[zero] = 1.0
+    return out
+
+
+class _OffsetTable:
+    """``e^{lambda dt}`` and ``dt phi1(lambda dt)`` for many offsets ``dt`` (s).
+
+    Offsets on a grid ``k h`` (fine times inside windows that start on the fine grid)
+    are looked up in a table of the grid's multiples; the others are computed.
+    """
+
+    def __init__(self, lam: np.ndarray, dt: np.ndarray, h: float | None):
+        self.lam, self.dt = lam, dt
+        self.k = None
+        if h is not None and len(dt):
+            k = np.rint(dt / h).astype(np.int64)
+            on_grid = np.abs(dt - k * h) <= 1e-9 * np.maximum(1.0, dt)
+            if np.all(on_grid) and k.max() <= 1_000_000:
+                self.k = k
+                grid = np.arange(k.max() + 1) * h
+                self._exp = np.exp(lam[None, :] * grid[:, None])
+                self._phi = grid[:, None] * phi1(lam[None, :] * grid[:, None])
+
+    def exp(self, sel: np.ndarray) -> np.ndarray:
+        """``e^{lambda dt}`` at the offsets ``sel`` (index array), (len(sel), R)."""
+        if self.k is not None:
+            return self._exp[self.k[sel]]
+        return np.exp(self.lam[None, :] * self.dt[sel, None])
+
+    def phi(self, sel: np.ndarray) -> np.ndarray:
+        """``dt phi1(lambda dt)`` at the offsets ``sel``, (len(sel), R)."""
+        if self.k is not None:
+            return self._phi[self.k[sel]]
+        d = self.dt[sel, None]
+        return d * phi1(self.lam[None, :] * d)
 
 
 # ---------------------------------------------------------------------------------------
@@ -285,37 +325,38 @@ def vehicle_to_imu(y: np.ndarray, m: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    y : (..., 63)
-        Vehicle features or their integrals.
-    m : (3, 3) or (..., 3, 3)
-        ``C_s^b`` of the fixed table (broadcast against ``y``'s leading axes).
+    y : (B, ..., 63)
+        Vehicle features or their integrals; every entry ``y[b]`` is seen through the
+        table ``m[b]``.
+    m : (B, 3, 3) or (3, 3)
+        ``C_s^b`` of the fixed table.
 
     Returns
     -------
-    ndarray (..., 63)
+    ndarray, shape of ``y``
     """
-    lead = np.broadcast_shapes(y.shape[:-1], m.shape[:-2])
-    mlead = m.shape[:-2]
-    y = np.broadcast_to(y, lead + (N_FEATURES,))
-    # Batch over the table's own leading axes; the rest of y's axes ride along as rows.
-    rows = lead[len(mlead) :] if lead[: len(mlead)] == mlead else None
-    if rows is None:  # pragma: no cover - callers pass m with y's leading axes
-        m = np.broadcast_to(m, lead + (3, 3))
-        mlead, rows = lead, ()
-    nb = int(np.prod(mlead, dtype=int))
+    m = np.asarray(m, dtype=float)
+    if m.ndim == 2:
+        m = m[None]
+        y = y[None]
+        squeeze = True
+    else:
+        squeeze = False
+    nb = len(m)
+    rows = y.shape[1:-1]
     nr = int(np.prod(rows, dtype=int))
-    yy = y.reshape(nb, nr, N_FEATURES)
-    mm = np.broadcast_to(m, mlead + (3, 3)).reshape(nb, 3, 3)
+    yy = np.ascontiguousarray(y).reshape(nb, nr, N_FEATURES)
     # kron(M, M)[(k, l), (i, j)] = M[k, i] M[l, j]
-    mk = (mm[:, :, None, :, None] * mm[:, None, :, None, :]).reshape(nb, 9, 9)
+    mk = (m[:, :, None, :, None] * m[:, None, :, None, :]).reshape(nb, 9, 9)
     out = np.empty((nb, nr, N_FEATURES), dtype=np.result_type(y, m))
     # C[a, i] = sum_k C_b^n[a, k] M[k, i]: rows (r, a) times M.
-    out[:, :, :9] = (yy[:, :, :9].reshape(nb, nr * 3, 3) @ mm).reshape(nb, nr, 9)
+    out[:, :, :9] = (yy[:, :, :9].reshape(nb, nr * 3, 3) @ m).reshape(nb, nr, 9)
     for lo in (9, 36):
         # C[a, i] x[j] = sum_kl C_b^n[a, k] x^b[l] M[k, i] M[l, j]: rows (r, a) times kron(M, M).
         blk = yy[:, :, lo : lo + 27].reshape(nb, nr * 3, 9)
         out[:, :, lo : lo + 27] = (blk @ mk).reshape(nb, nr, 27)
-    return out.reshape(lead + (N_FEATURES,))
+    out = out.reshape((nb,) + rows + (N_FEATURES,))
+    return out[0] if squeeze else out
 
 
 def signed_coefficients(modes: NavModes, src: SourceSet) -> np.ndarray:
@@ -485,7 +526,7 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     step = phase_step(pieces, t_coarse, _grid_step(t_fine), fastest)
     win = make_windows(pieces, t_coarse, fastest, step)
     a_sig = signed_coefficients(modes, sources)
-    run = _Run(modes, history, pieces, win, t_coarse, a_sig, step)
+    run = _Run(modes, history, pieces, win, t_coarse, a_sig, step, sources)
     run.still_windows()
     run.cached_windows()
     run.direct_windows()
@@ -493,20 +534,26 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     run.z_end = scan(lam, 0.0, z0, win.b, run.incr)
     run.z_start = np.concatenate([z0[None], run.z_end[:-1]])
 
-    fine_z = np.empty((len(t_fine), modes.n_modes), dtype=complex)
-    at_zero = t_fine <= MERGE
-    fine_z[at_zero] = z0
-    inside = np.flatnonzero(~at_zero)
-    fine_z[inside] = run.fine_states(t_fine[inside], _grid_step(t_fine))
+    # Fine outputs in blocks (a 720 h run at 1 s has 2.6 million of them).
+    fine = np.empty((len(t_fine), 9))
+    h = _grid_step(t_fine)
+    for lo in range(0, len(t_fine), CHUNK_FINE):
+        tb = t_fine[lo : lo + CHUNK_FINE]
+        zb = np.empty((len(tb), modes.n_modes), dtype=complex)
+        at_zero = tb <= MERGE
+        zb[at_zero] = z0
+        inside = np.flatnonzero(~at_zero)
+        if len(inside):
+            zb[inside] = run.fine_states(tb[inside], h)
+        fine[lo : lo + len(tb)] = modes.to_nav(zb)
 
     # Per source: modal inputs per coarse interval, then the scan over coarse intervals.
     z_src0 = modes.to_modes(sources.x0, axis=0)  # (R, N)
     coarse_z = np.empty((len(t_coarse), modes.n_modes, sources.n), dtype=complex)
     coarse_z[0] = z_src0
     if len(t_coarse) > 1:
-        inputs = _source_inputs(modes, run.y_coarse[1:], sources)
+        inputs = run.inputs[1:]
         coarse_z[1:] = scan(lam, float(t_coarse[0]), z_src0, t_coarse[1:], inputs)
-    fine = modes.to_nav(fine_z)
     coarse = modes.to_nav(coarse_z * sources.value[None, None, :], axis=1)
     counts = {
         name: int(np.count_nonzero(win.kind == k))
@@ -518,7 +565,7 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
 class _Run:
     """Working state of one :func:`constant_error_response` call (windows by kind)."""
 
-    def __init__(self, modes, history, pieces, win, t_coarse, a_sig, step):
+    def __init__(self, modes, history, pieces, win, t_coarse, a_sig, step, sources):
         self.modes, self.history, self.pieces, self.win = modes, history, pieces, win
         self.t_coarse, self.a_sig, self.step = t_coarse, a_sig, step
         self.lam = modes.lam
@@ -526,11 +573,18 @@ class _Run:
         self.earth, self.f_n = site.earth_rate_n, site.specific_force_n
         nw, r = len(win.a), modes.n_modes
         self.incr = np.zeros((nw, r), dtype=complex)  # signed increment to each window's end
-        self.y_coarse = np.zeros((len(t_coarse), r, N_FEATURES), dtype=complex)
+        # Modal input of every source per coarse interval (feature integrals are turned
+        # into source inputs as they arrive: N sources take less room than 63 features).
+        self.sources = sources
+        self.inputs = np.zeros((len(t_coarse), r, sources.n), dtype=complex)
         self.u_still = np.zeros((nw, r), dtype=complex)  # constant input of still windows
         self.direct_u: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self.cached_fine = None
         self.nodes = 0
+
+    def _add_features(self, j: np.ndarray, y: np.ndarray) -> None:
+        """Add feature integrals ``y`` (K, R, 63) of coarse intervals ``j`` (distinct)."""
+        self.inputs[j] += _source_inputs(self.modes, y, self.sources)
 
     # --- attitude at nodes ---------------------------------------------------------
     def _imu_features(self, t, piece):
@@ -558,7 +612,7 @@ class _Run:
         self.incr[idx] = wt * u
         w = wt * self._to_coarse(win.b[idx], win.coarse[idx])
         jj, sums = _group_sum(win.coarse[idx], w[:, :, None] * feats[:, None, :])
-        self.y_coarse[jj] += sums
+        self._add_features(jj, sums)
 
     # --- cached windows: table fixed, vehicle periodic --------------------------------
     def cached_windows(self) -> None:
@@ -613,12 +667,15 @@ class _Run:
                 cell, w[:, r].imag, size
             )
         coef = coef.reshape(len(pairs), m, len(lam))
-        sums = np.empty((len(pairs), len(lam), N_FEATURES), dtype=complex)
-        for r in range(len(lam)):
-            sums[:, r, :] = coef[:, :, r] @ y_phase[:, r, :]
-        acc_imu = vehicle_to_imu(sums, mats[pairs % nt][:, None])
-        jj, sums_j = _group_sum(pairs // nt, acc_imu)
-        self.y_coarse[jj] += sums_j
+        # In blocks of pairs (long runs have tens of thousands of coarse intervals).
+        for lo in range(0, len(pairs), 4096):
+            blk = slice(lo, lo + 4096)
+            sums = np.empty((len(pairs[blk]), len(lam), N_FEATURES), dtype=complex)
+            for r in range(len(lam)):
+                sums[:, r, :] = coef[blk, :, r] @ y_phase[:, r, :]
+            acc_imu = vehicle_to_imu(sums, mats[pairs[blk] % nt])
+            jj, sums_j = _group_sum(pairs[blk] // nt, acc_imu)
+            self._add_features(jj, sums_j)
         self.cached_forms = forms
         self.cached_table = np.full(len(win.a), -1)
         self.cached_table[idx] = inv
@@ -648,34 +705,32 @@ class _Run:
             wt = nd.weight[:, None] * np.exp(lam[None, :] * (b_w - nd.t)[:, None])
             self.incr[sel] = np.add.reduceat(wt * u, nd.first, axis=0)
             cj = win.coarse[sel][nd.window]
-            _accumulate(self.y_coarse, cj, wt * self._to_coarse(b_w, cj), feats)
+            jj, sums = _accumulate(cj, wt * self._to_coarse(b_w, cj), feats)
+            self._add_features(jj, sums)
             self.direct_t[base : base + len(nd.t)] = nd.t
             self.direct_u[base : base + len(nd.t)] = u
             lo = hi
 
     # --- fine output times --------------------------------------------------------------
     def fine_states(self, t: np.ndarray, dt_fine: float | None) -> np.ndarray:
-        win, lam = self.win, self.lam
+        win = self.win
         w = np.searchsorted(win.b, t - MERGE, side="left").clip(0, len(win.b) - 1)
         dt = t - win.a[w]
-        out = np.empty((len(t), len(lam)), dtype=complex)
+        table = _OffsetTable(self.lam, dt, dt_fine)
+        out = np.empty((len(t), len(self.lam)), dtype=complex)
         kind = win.kind[w]
         s = np.flatnonzero(kind == STILL)
         if len(s):
-            e = np.exp(lam[None, :] * dt[s, None])
-            out[s] = e * self.z_start[w[s]]
-            out[s] += dt[s, None] * phi1(lam[None, :] * dt[s, None]) * self.u_still[w[s]]
+            out[s] = table.exp(s) * self.z_start[w[s]] + table.phi(s) * self.u_still[w[s]]
         c = np.flatnonzero(kind == CACHED)
         if len(c):
-            # Fine times sit at the same offsets in every cached window: a table of e^{lambda dt}.
             pos = np.clip(np.round(dt[c] / dt_fine).astype(int) - 1, 0, None)
-            nf = int(round(self.step / dt_fine))
-            e = np.exp(lam[None, :] * (np.arange(1, nf + 1) * dt_fine)[:, None])[pos]
-            out[c] = e * (self.z_start[w[c]] + self._cached_integrals(w[c], pos, dt_fine))
+            out[c] = table.exp(c) * (
+                self.z_start[w[c]] + self._cached_integrals(w[c], pos, dt_fine)
+            )
         d = np.flatnonzero(kind == DIRECT)
         if len(d):
-            e = np.exp(lam[None, :] * dt[d, None])
-            out[d] = e * (self.z_start[w[d]] + self._direct_integrals(w[d], dt[d]))
+            out[d] = table.exp(d) * (self.z_start[w[d]] + self._direct_integrals(w[d], dt[d]))
         return out
 
     def _cached_integrals(self, w: np.ndarray, pos: np.ndarray, dt_fine: float) -> np.ndarray:
@@ -699,25 +754,36 @@ class _Run:
         return vals[self.win.phase[w], pos, self.cached_table[w]]
 
     def _direct_integrals(self, w: np.ndarray, dt: np.ndarray) -> np.ndarray:
-        """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine times of direct windows."""
+        """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine times of direct windows.
+
+        The Chebyshev series of ``g(s) = e^{-lambda (s - a)} u(s)`` on each window,
+        integrated term by term to the output times. Windows of the same shape (points,
+        length, fine offsets: every turn of an open-loop table on a still vehicle) share
+        one integration matrix, applied to all of them in one product.
+        """
         win, lam = self.win, self.lam
         out = np.zeros((len(w), len(lam)), dtype=complex)
-        n_w = win.n[w]
-        for m in np.unique(n_w):
-            sel = np.flatnonzero(n_w == m)
-            wins, inverse = np.unique(w[sel], return_inverse=True)
-            node = self.direct_first[wins][:, None] + np.arange(m)[None, :]  # (Wm, m)
-            shift = self.direct_t[node] - win.a[wins][:, None]
-            g = self.direct_u[node] * np.exp(-lam[None, None, :] * shift[..., None])
-            # Chebyshev coefficients of g per window: one (m, m) @ (m, Wm R) product.
-            coef = np.tensordot(coefficient_matrix(int(m)), g, axes=([1], [1]))  # (m, Wm, R)
-            half = 0.5 * (win.b[w[sel]] - win.a[w[sel]])
-            ints = integral_of_series(dt[sel] / half - 1.0, int(m))  # (F, m)
-            inv = inverse.reshape(-1)
-            acc = np.zeros((len(sel), len(lam)), dtype=complex)
-            for k in range(int(m)):
-                acc += ints[:, k, None] * coef[k][inv]
-            out[sel] = half[:, None] * acc
+        wins, first_pt, counts = np.unique(w, return_index=True, return_counts=True)
+        length = win.b[wins] - win.a[wins]
+        key = np.stack(
+            [win.n[wins], np.rint(length * 1e6), np.rint(dt[first_pt] * 1e6), counts], axis=1
+        ).astype(np.int64)
+        shapes, shape_of = np.unique(key, axis=0, return_inverse=True)
+        shape_of = shape_of.reshape(-1)
+        for sh in range(len(shapes)):
+            members = np.flatnonzero(shape_of == sh)
+            m = int(win.n[wins[members[0]]])
+            node = self.direct_first[wins[members]][:, None] + np.arange(m)[None, :]  # (Wg, m)
+            shift = self.direct_t[node] - win.a[wins[members]][:, None]
+            g = self.direct_u[node] * np.exp(-lam[None, None, :] * shift[..., None])  # (Wg,m,R)
+            half = 0.5 * length[members[0]]
+            cnt = int(counts[members[0]])
+            # Points of one window are consecutive (sorted times): first_pt .. + count.
+            pts = first_pt[members][:, None] + np.arange(cnt)[None, :]  # (Wg, cnt)
+            x = dt[pts[0]] / half - 1.0
+            jmat = integration_matrix(x, m) * half  # (cnt, m), shared by the group
+            vals = np.tensordot(jmat, g, axes=([1], [1]))  # (cnt, Wg, R)
+            out[pts.T.ravel()] = vals.reshape(cnt * len(members), len(lam))
         return out
 
 
@@ -784,8 +850,11 @@ def _group_sum(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.nda
     return k[start], np.add.reduceat(v, start, axis=0)
 
 
-def _accumulate(y: np.ndarray, cj: np.ndarray, wt: np.ndarray, feats: np.ndarray) -> None:
-    """``y[j] += sum over nodes of interval j of wt[node, r] * feats[node, f]``."""
+def _accumulate(cj: np.ndarray, wt: np.ndarray, feats: np.ndarray):
+    """Per coarse interval j: ``sum over its nodes of wt[node, r] * feats[node, f]``.
+
+    Returns the distinct intervals and their sums (K, R, 63).
+    """
     # Nodes are in time order, so each coarse interval is one contiguous run.
     start = np.flatnonzero(np.concatenate([[True], cj[1:] != cj[:-1]]))
     count = np.diff(np.concatenate([start, [len(cj)]]))
@@ -797,7 +866,7 @@ def _accumulate(y: np.ndarray, cj: np.ndarray, wt: np.ndarray, feats: np.ndarray
     wpad[run, pos] = wt
     fpad[run, pos] = feats
     wt_t = np.swapaxes(wpad, 1, 2)
-    y[cj[start]] += np.matmul(wt_t.real, fpad) + 1j * np.matmul(wt_t.imag, fpad)
+    return cj[start], np.matmul(wt_t.real, fpad) + 1j * np.matmul(wt_t.imag, fpad)
 
 
 # ---------------------------------------------------------------------------------------
@@ -840,5 +909,5 @@ def white_noise_covariance(
     m = inv @ g @ q @ g.T @ inv.conj().T
     s = lam[:, None] + lam.conj()[None, :]
     xi = t[:, None, None] * phi1(s[None] * t[:, None, None])
-    p = np.einsum("ia,tab,jb->tij", out, m[None] * xi, out.conj()).real
+    p = (out @ (m[None] * xi) @ out.conj().T).real
     return 0.5 * (p + np.swapaxes(p, 1, 2))
