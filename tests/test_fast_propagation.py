@@ -317,3 +317,21 @@ def test_white_noise_closed_form_equals_stepped_van_loan(vertical):
     assert err[1:].max() < 1e-9
     # Limiting case: early on the attitude variance grows as ARW^2 t (per axis).
     assert math.isclose(closed[1, 0, 0], arw**2 * 60.0, rel_tol=1e-3)
+
+
+@pytest.mark.parametrize("scheme", ["two-position", "heading-isolation", "nulling-two-position"])
+def test_quadrature_is_converged(monkeypatch, scheme):
+    # Halving the phase budget of every window (twice the windows, each sampled at the
+    # rate its own budget asks) must change nothing beyond round-off: the windows'
+    # Chebyshev quadrature is converged on the continuous motion.
+    dur = 3600.0
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, dur), SWING, dur)
+    ref = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    monkeypatch.setattr(fp, "MAX_PHASE", fp.MAX_PHASE / 2.0)
+    finer = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    assert _relative(finer.nav, ref.nav) < 1e-11
+    n = len(ref.t_cov)
+    assert (
+        _relative(finer.source_horizontal.reshape(n, -1), ref.source_horizontal.reshape(n, -1))
+        < 1e-11
+    )

@@ -48,10 +48,21 @@ class Pieces:
         Where the history is a vehicle motion seen through a *fixed* turntable, the
         table's ``C_s^b`` (so ``C_s^n = C_b^n(t) C_s^b``); NaN where the table moves; None
         when the history has no such structure.
+    constant : (P,) bool or None
+        True where ``C_s^n`` turns at a *constant* angular velocity (a table turn on a
+        still vehicle, a stop on a steadily turning one, every interval of a
+        timeline): the input is then a trigonometric polynomial in time and its
+        integrals have closed forms. None means nowhere (besides ``still``).
     vehicle_period : float or None
         Period of the vehicle attitude ``C_b^n(t)``, s, if it repeats (a yaw swing, a
-        steady turn); with ``table`` it lets the engine integrate the vehicle part once
-        per phase (:meth:`AttitudeHistory.evaluate_vehicle`).
+        steady turn); with ``phase_class`` it lets the engine integrate the vehicle
+        part once per phase.
+    phase_class : (P,) int or None
+        Pieces whose attitude is a function of the vehicle phase alone: 0 for the
+        vehicle seen through the fixed table ``table`` (the engine reuses
+        :meth:`AttitudeHistory.evaluate_vehicle`), ``k >= 1`` for pieces that are
+        identical functions of the phase within class k (e.g. heading-isolation holds
+        of one target heading), -1 otherwise.
     """
 
     breaks: np.ndarray
@@ -59,6 +70,8 @@ class Pieces:
     still: np.ndarray
     table: np.ndarray | None = None
     vehicle_period: float | None = None
+    constant: np.ndarray | None = None
+    phase_class: np.ndarray | None = None
 
 
 class AttitudeHistory(Protocol):
@@ -104,9 +117,9 @@ class TimelineHistory:
         return self.timeline.duration
 
     def pieces(self) -> Pieces:
-        """One piece per interval; bandwidth ``|w_k|``; still where ``w_k = 0``."""
+        """One piece per interval; bandwidth ``|w_k|``; still where ``w_k = 0``; constant rate."""
         rate = np.linalg.norm(self.timeline.omega_n, axis=1)
-        return Pieces(self.timeline.times, rate, rate == 0.0)
+        return Pieces(self.timeline.times, rate, rate == 0.0, constant=np.ones(len(rate), bool))
 
     def evaluate(self, t: np.ndarray, piece: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Rodrigues rotation of the interval's start attitude; its constant rate."""

@@ -50,6 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from inserr.core.rotations import skew
 from inserr.model.attitude_history import AttitudeHistory, Pieces
 from inserr.model.modal import NavModes
 from inserr.model.psi_model import ErrorModel
@@ -65,6 +66,9 @@ from inserr.model.quadrature import _coefficient_matrix as coefficient_matrix
 
 #: Nodes evaluated at once (bounds memory: ~63 features and R modal weights per node).
 CHUNK_NODES = 40_000
+#: Samples of a constant-rate window: the features are trigonometric polynomials of
+#: degree 2 in the turn angle, which 5 equally spaced angles determine exactly.
+ROTATION_SAMPLES = 5
 #: Fine output times evaluated at once (bounds memory on long runs).
 CHUNK_FINE = 200_000
 #: Largest |Re lambda| * time span of one scan block (keeps exp() within float range).
@@ -172,7 +176,7 @@ class SourceSet:
 # ---------------------------------------------------------------------------------------
 # Windows
 # ---------------------------------------------------------------------------------------
-STILL, CACHED, DIRECT = 0, 1, 2
+STILL, CACHED, DIRECT, ROTATION = 0, 1, 2, 3
 
 
 @dataclass(frozen=True)
@@ -188,9 +192,11 @@ class Windows:
     n : (W,) int
         Chebyshev points of each window.
     kind : (W,) int
-        :data:`STILL` (constant attitude: closed forms), :data:`CACHED` (table fixed on
-        a periodic vehicle, a whole phase step: the vehicle part is integrated once per
-        phase) or :data:`DIRECT` (attitude sampled at the window's own points).
+        :data:`STILL` (constant attitude: closed forms), :data:`ROTATION` (constant
+        angular velocity: the input is a trigonometric polynomial, closed forms too),
+        :data:`CACHED` (table fixed on a periodic vehicle, a whole phase step: the
+        vehicle part is integrated once per phase) or :data:`DIRECT` (attitude sampled
+        at the window's own points).
     phase : (W,) int
         Phase index of a cached window (its start is ``phase * step`` modulo the
         vehicle period), -1 otherwise.
@@ -213,6 +219,14 @@ def _is_multiple(x: float, y: float) -> bool:
     return round(q) >= 1 and abs(q - round(q)) < 1e-9
 
 
+def _cacheable(pieces: Pieces) -> np.ndarray:
+    """Pieces whose attitude is a function of the vehicle phase (and not a closed form)."""
+    if pieces.phase_class is None:
+        return np.zeros(len(pieces.still), dtype=bool)
+    constant = pieces.constant if pieces.constant is not None else False
+    return (pieces.phase_class >= 0) & ~pieces.still & ~constant
+
+
 def phase_step(pieces: Pieces, t_coarse: np.ndarray, dt_fine: float | None, fastest: float):
     """Step of the phase grid on which the vehicle part is reused, or None.
 
@@ -222,9 +236,9 @@ def phase_step(pieces: Pieces, t_coarse: np.ndarray, dt_fine: float | None, fast
     can, divides the coarse step (so coarse times do not cut phase windows).
     """
     period = pieces.vehicle_period
-    if period is None or pieces.table is None:
+    if period is None or pieces.phase_class is None:
         return None
-    fixed = ~np.isnan(pieces.table[:, 0, 0]) & ~pieces.still
+    fixed = _cacheable(pieces)
     if not np.any(fixed) or dt_fine is None:
         return None
     rate = 2.0 * float(pieces.bandwidth[fixed].max()) + fastest
@@ -268,10 +282,11 @@ def make_windows(
     a, b = cuts[:-1], cuts[1:]
     mid = 0.5 * (a + b)
     piece = np.clip(np.searchsorted(pieces.breaks, mid, side="right") - 1, 0, len(pieces.still) - 1)
-    kind = np.where(pieces.still[piece], STILL, DIRECT)
+    constant = pieces.constant[piece] if pieces.constant is not None else np.zeros(len(a), bool)
+    kind = np.where(pieces.still[piece], STILL, np.where(constant, ROTATION, DIRECT))
     phase = np.full(len(a), -1)
     if step is not None:
-        fixed = ~np.isnan(pieces.table[piece, 0, 0]) & (kind == DIRECT)
+        fixed = _cacheable(pieces)[piece] & (kind == DIRECT)
         k = np.round(a / step).astype(int)
         whole = (
             fixed
@@ -292,10 +307,10 @@ def make_windows(
         a2 = a[rep] + j * length
         b2 = np.where(j == parts[rep] - 1, b[rep], a2 + length)
         a, b, piece, kind, phase, ph = a2, b2, piece[rep], kind[rep], phase[rep], (ph / parts)[rep]
-    n = np.where(kind == DIRECT, points_for(ph), 1)
+    n = np.where(kind == DIRECT, points_for(ph), np.where(kind == ROTATION, ROTATION_SAMPLES, 1))
     if np.any(kind == CACHED):
-        # One template for every phase: sized by the largest vehicle bandwidth of a stop.
-        fixed = ~np.isnan(pieces.table[:, 0, 0]) & ~pieces.still
+        # One template for every phase: sized by the largest bandwidth of a cached piece.
+        fixed = _cacheable(pieces)
         cached_phase = (2.0 * float(pieces.bandwidth[fixed].max()) + fastest_mode) * step
         n = np.where(kind == CACHED, points_for(np.array([cached_phase]))[0], n)
     coarse = np.searchsorted(t_coarse, b - MERGE, side="left")
@@ -528,6 +543,7 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     a_sig = signed_coefficients(modes, sources)
     run = _Run(modes, history, pieces, win, t_coarse, a_sig, step, sources)
     run.still_windows()
+    run.rotation_windows()
     run.cached_windows()
     run.direct_windows()
     z0 = modes.to_modes(sources.signed()[4])
@@ -614,8 +630,92 @@ class _Run:
         jj, sums = _group_sum(win.coarse[idx], w[:, :, None] * feats[:, None, :])
         self._add_features(jj, sums)
 
+    # --- rotation windows: constant angular velocity, closed forms ---------------------
+    def rotation_windows(self) -> None:
+        """Windows where ``C_s^n`` turns at a constant rate: harmonic closed forms.
+
+        With ``R(tau) = a a^T + cos(rho tau) (I - a a^T) + sin(rho tau) [a x]`` every
+        feature is ``sum_k F_k e^{i k rho tau}``, ``|k| <= 2`` (products of two attitude
+        matrices; ``C^T w`` is constant about the turn axis). Five equally spaced turn
+        angles give the ``F_k`` exactly (a discrete Fourier transform), and
+        ``int_0^L e^{lambda (L - tau)} e^{i nu tau} dtau = e^{lambda L} L phi1((i nu - lambda) L)``.
+        """
+        win, lam = self.win, self.lam
+        idx = np.flatnonzero(win.kind == ROTATION)
+        if not len(idx):
+            return
+        c_a, w = self.history.evaluate(win.a[idx], win.piece[idx])
+        self.nodes += len(idx)
+        rho = np.linalg.norm(w, axis=1)
+        axis = w / rho[:, None]
+        ks = np.arange(-2, 3)
+        theta = 2.0 * np.pi * np.arange(ROTATION_SAMPLES) / ROTATION_SAMPLES
+        kx = skew(axis)  # (W, 3, 3)
+        rot = (
+            np.eye(3)[None, None]
+            + np.sin(theta)[None, :, None, None] * kx[:, None]
+            + (1.0 - np.cos(theta))[None, :, None, None] * (kx @ kx)[:, None]
+        )  # (W, 5, 3, 3): the attitude after turning by theta_j
+        c = rot @ c_a[:, None]
+        w_is = np.einsum("wjba,wb->wja", c, self.earth + w)
+        f_s = np.einsum("wjba,b->wja", c, self.f_n)
+        feats = _features(c.reshape(-1, 3, 3), w_is.reshape(-1, 3), f_s.reshape(-1, 3))
+        feats = feats.reshape(len(idx), ROTATION_SAMPLES, N_FEATURES)
+        # F_k = (1/5) sum_j F(theta_j) e^{-i k theta_j}, k = -2..2
+        dft = np.exp(-1j * ks[:, None] * theta[None, :]) / ROTATION_SAMPLES  # (5 k, 5 j)
+        fk = np.einsum("kj,wjf->wkf", dft, feats)  # (W, 5, 63)
+        nu = ks[None, :] * rho[:, None]  # (W, 5) rad/s
+        length = win.b[idx] - win.a[idx]
+        # int_0^L e^{lambda (L - tau)} e^{i nu tau} dtau, per window, harmonic, mode.
+        zl = (1j * nu[:, :, None] - lam[None, None, :]) * length[:, None, None]
+        wt = (np.exp(lam[None, :] * length[:, None]) * length[:, None])[:, None, :] * phi1(zl)
+        uk = np.einsum("wkf,rf->wkr", fk, self.a_sig)  # signed input per harmonic
+        self.incr[idx] = np.einsum("wkr,wkr->wr", uk, wt)
+        j = win.coarse[idx]
+        to_c = self._to_coarse(win.b[idx], j)  # (W, R)
+        y = np.einsum("wkr,wkf->wrf", wt * to_c[:, None, :], fk)
+        jj, sums = _group_sum(j, y)
+        self._add_features(jj, sums)
+        self.rotation_uk = np.zeros((len(win.a), ROTATION_SAMPLES, len(lam)), dtype=complex)
+        self.rotation_uk[idx] = uk
+        self.rotation_nu = np.zeros((len(win.a), ROTATION_SAMPLES))
+        self.rotation_nu[idx] = nu
+
+    def _rotation_integrals(self, w: np.ndarray, dt: np.ndarray, h: float | None) -> np.ndarray:
+        """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine times of rotation windows."""
+        lam = self.lam
+        # int_0^d e^{(i nu - lambda) s} ds = d phi1((i nu - lambda) d), evaluated once per
+        # distinct (rate, offset) pair: fine times repeat the same offsets turn after turn.
+        rates, cls = np.unique(np.rint(self.rotation_nu[w, -1] * 1e12), return_inverse=True)
+        cls = cls.reshape(-1)
+        k = np.rint(dt / h).astype(np.int64) if h else None
+        if k is not None and np.all(np.abs(dt - k * h) <= 1e-9 * np.maximum(1.0, dt)):
+            span = int(k.max()) + 1
+            key = cls * span + k
+            d_key = (np.arange(len(rates) * span) % span) * h
+        else:
+            uniq_d, kd = np.unique(np.rint(dt * 1e9).astype(np.int64), return_inverse=True)
+            span = len(uniq_d)
+            key = cls * span + kd.reshape(-1)
+            d_key = np.tile(uniq_d * 1e-9, len(rates))
+        nu_key = np.repeat(rates * 1e-12 / 2.0, span)[:, None] * np.arange(-2, 3)[None, :]
+        used = np.unique(key)
+        d = d_key[used][:, None, None]
+        table = np.zeros((len(d_key), ROTATION_SAMPLES, len(lam)), dtype=complex)
+        table[used] = d * phi1((1j * nu_key[used][:, :, None] - lam[None, None, :]) * d)
+        return np.einsum("fkr,fkr->fr", self.rotation_uk[w], table[key])
+
     # --- cached windows: table fixed, vehicle periodic --------------------------------
     def cached_windows(self) -> None:
+        """Whole phase steps of pieces whose attitude depends on the vehicle phase only.
+
+        Class 0: the vehicle seen through a fixed table ``M`` (``C = C_b^n(t) M``): the
+        vehicle's own features are integrated once per phase and turned into IMU
+        features per table afterwards (:func:`vehicle_to_imu`). Classes >= 1: other
+        phase-periodic pieces (e.g. heading-isolation holds of one target heading):
+        their IMU features are sampled once per (class, phase) at a representative
+        window. Every window of a (class, phase, table) then costs a lookup.
+        """
         win, step, lam = self.win, self.step, self.lam
         idx = np.flatnonzero(win.kind == CACHED)
         if not len(idx):
@@ -624,61 +724,83 @@ class _Run:
         m = int(round(self.pieces.vehicle_period / step))
         x = chebyshev_points(n)
         s = (x + 1.0) * 0.5 * step  # node offsets in a window
-        t = (np.arange(m)[:, None] * step + s[None, :]).ravel()
-        c_bn, w_nb = self.history.evaluate_vehicle(t)
-        self.nodes += len(t)
-        w_b = np.einsum("nji,nj->ni", c_bn, self.earth + w_nb)
-        f_b = np.einsum("nji,j->ni", c_bn, self.f_n)
-        fv = _features(c_bn, w_b, f_b).reshape(m, n, N_FEATURES)
+        cls = self.pieces.phase_class[win.piece[idx]]
+        ph = win.phase[idx]
+        n_cls = int(cls.max()) + 1
+        fv = np.zeros((n_cls, m, n, N_FEATURES))
+        if np.any(cls == 0):
+            t = (np.arange(m)[:, None] * step + s[None, :]).ravel()
+            c_bn, w_nb = self.history.evaluate_vehicle(t)
+            self.nodes += len(t)
+            w_b = np.einsum("nji,nj->ni", c_bn, self.earth + w_nb)
+            f_b = np.einsum("nji,j->ni", c_bn, self.f_n)
+            fv[0] = _features(c_bn, w_b, f_b).reshape(m, n, N_FEATURES)
+        other = np.flatnonzero(cls > 0)
+        if len(other):
+            # One representative window per (class, phase) present.
+            cp, first = np.unique(cls[other] * m + ph[other], return_index=True)
+            rep = idx[other[first]]
+            t = (win.a[rep][:, None] + s[None, :]).ravel()
+            feats = self._imu_features(t, np.repeat(win.piece[rep], n))
+            fv[cp // m, cp % m] = feats.reshape(len(rep), n, N_FEATURES)
         weight = fejer_weights(n) * 0.5 * step
         # Integral over a window of phase p to its end: sum_q w_q e^{lambda (step - s_q)} F_pq.
         wend = weight[:, None] * np.exp(lam[None, :] * (step - s)[:, None])  # (n, R)
-        y_phase = np.einsum("qr,pqf->prf", wend, fv)  # (m, R, 63), vehicle features
+        y_phase = np.einsum("qr,cpqf->cprf", wend, fv)  # (C, m, R, 63)
         self.cached_template = (n, s, fv)
 
-        # The table matrix of each cached window's piece; group equal tables (per piece).
-        pieces = np.unique(win.piece[idx])
-        keys = np.round(self.pieces.table[pieces].reshape(len(pieces), 9), 12)
-        uniq, inv_piece = np.unique(keys, axis=0, return_inverse=True)
-        table_of_piece = np.full(len(self.pieces.still), -1)
-        table_of_piece[pieces] = inv_piece.reshape(-1)
-        inv = table_of_piece[win.piece[idx]]
+        # Tables: class 0 windows see their piece's table; the others the identity.
+        tables = np.where(
+            (cls == 0)[:, None, None], self.pieces.table[win.piece[idx]], np.eye(3)[None]
+        )
+        keys = np.round(tables.reshape(len(idx), 9), 12)
+        uniq, inv = np.unique(keys, axis=0, return_inverse=True)
+        inv = inv.reshape(-1)
         mats = uniq.reshape(-1, 3, 3)
         nt = len(mats)
-        # Signed input as a linear form in the vehicle features, per table: A_M.
+        # Signed input as a linear form in the template features, per table: A_M.
         forms = _vehicle_forms(self.a_sig, mats)  # (T, R, 63)
-        # Signed increment of every (table, phase): per mode one (m, 63) @ (63, T) product.
-        inc_tp = np.empty((m, nt, len(lam)), dtype=complex)
+        # Signed increment of every (class, phase, table): per mode one product.
+        inc = np.empty((n_cls, m, nt, len(lam)), dtype=complex)
         for r in range(len(lam)):
-            inc_tp[:, :, r] = y_phase[:, r, :] @ forms[:, r, :].T
-        ph = win.phase[idx]
-        self.incr[idx] = inc_tp[ph, inv]
-        # Per source: the windows of one (coarse interval, table) pair add up to
-        # sum_p c[pair, p, r] y_phase[p, r, :], with c the summed propagation factors
-        # e^{lambda (t_c - b)} of the pair's windows of phase p; then one transform per pair.
+            inc[:, :, :, r] = (
+                y_phase[:, :, r, :].reshape(-1, N_FEATURES) @ forms[:, r, :].T
+            ).reshape(n_cls, m, nt)
+        self.incr[idx] = inc[cls, ph, inv]
+        # Per source: the windows of one (coarse interval, class, table) group add up to
+        # sum_p c[group, p, r] y_phase[class, p, r, :], with c the summed propagation
+        # factors e^{lambda (t_c - b)} of the group's windows of phase p; then one
+        # transform per group.
         j = win.coarse[idx]
         w = self._to_coarse(win.b[idx], j)  # (K, R)
-        pairs, pair_of = np.unique(j * nt + inv, return_inverse=True)
-        cell = pair_of.reshape(-1) * m + ph
-        size = len(pairs) * m
+        groups, group_of = np.unique((j * n_cls + cls) * nt + inv, return_inverse=True)
+        cell = group_of.reshape(-1) * m + ph
+        size = len(groups) * m
         coef = np.empty((size, len(lam)), dtype=complex)
         for r in range(len(lam)):
             coef[:, r] = np.bincount(cell, w[:, r].real, size) + 1j * np.bincount(
                 cell, w[:, r].imag, size
             )
-        coef = coef.reshape(len(pairs), m, len(lam))
-        # In blocks of pairs (long runs have tens of thousands of coarse intervals).
-        for lo in range(0, len(pairs), 4096):
+        coef = coef.reshape(len(groups), m, len(lam))
+        g_table = groups % nt
+        g_class = (groups // nt) % n_cls
+        g_j = groups // (nt * n_cls)
+        # In blocks of groups (long runs have tens of thousands of coarse intervals).
+        for lo in range(0, len(groups), 4096):
             blk = slice(lo, lo + 4096)
-            sums = np.empty((len(pairs[blk]), len(lam), N_FEATURES), dtype=complex)
-            for r in range(len(lam)):
-                sums[:, r, :] = coef[blk, :, r] @ y_phase[:, r, :]
-            acc_imu = vehicle_to_imu(sums, mats[pairs[blk] % nt])
-            jj, sums_j = _group_sum(pairs[blk] // nt, acc_imu)
+            sums = np.empty((len(groups[blk]), len(lam), N_FEATURES), dtype=complex)
+            for c in np.unique(g_class[blk]):
+                sel = np.flatnonzero(g_class[blk] == c)
+                for r in range(len(lam)):
+                    sums[sel, r, :] = coef[blk][sel, :, r] @ y_phase[c, :, r, :]
+            acc_imu = vehicle_to_imu(sums, mats[g_table[blk]])
+            jj, sums_j = _group_sum(g_j[blk], acc_imu)
             self._add_features(jj, sums_j)
         self.cached_forms = forms
         self.cached_table = np.full(len(win.a), -1)
         self.cached_table[idx] = inv
+        self.cached_class = np.full(len(win.a), -1)
+        self.cached_class[idx] = cls
 
     # --- direct windows: attitude sampled at each window's points ----------------------
     def direct_windows(self) -> None:
@@ -722,6 +844,11 @@ class _Run:
         s = np.flatnonzero(kind == STILL)
         if len(s):
             out[s] = table.exp(s) * self.z_start[w[s]] + table.phi(s) * self.u_still[w[s]]
+        rr = np.flatnonzero(kind == ROTATION)
+        if len(rr):
+            out[rr] = table.exp(rr) * (
+                self.z_start[w[rr]] + self._rotation_integrals(w[rr], dt[rr], dt_fine)
+            )
         c = np.flatnonzero(kind == CACHED)
         if len(c):
             pos = np.clip(np.round(dt[c] / dt_fine).astype(int) - 1, 0, None)
@@ -742,16 +869,16 @@ class _Run:
         jmat = integral_of_series(xf, n) @ coefficient_matrix(n) * (0.5 * step)  # (nf, n)
         g = np.exp(-lam[None, :] * s_nodes[:, None])  # (n, R)
         forms = self.cached_forms  # (T, R, 63)
-        m = fv.shape[0]
-        vals = np.empty((m, nf, len(forms), len(lam)), dtype=complex)
+        n_cls, m = fv.shape[0], fv.shape[1]
+        vals = np.empty((n_cls, m, nf, len(forms), len(lam)), dtype=complex)
         for r in range(len(lam)):
-            # H[p, f, feat] = sum_q J[f, q] e^{-lambda_r s_q} F_pq[feat]; then the forms of
-            # every table: one (m nf, 63) @ (63, T) product per mode.
-            h = np.einsum("fq,pqv->pfv", jmat * g[None, :, r], fv).reshape(m * nf, -1)
-            vals[:, :, :, r] = (
+            # H[c, p, f, feat] = sum_q J[f, q] e^{-lambda_r s_q} F_cpq[feat]; then the forms
+            # of every table: one (C m nf, 63) @ (63, T) product per mode.
+            h = np.einsum("fq,cpqv->cpfv", jmat * g[None, :, r], fv).reshape(-1, N_FEATURES)
+            vals[..., r] = (
                 _apply_form(h.real, forms[:, r, :]) + 1j * _apply_form(h.imag, forms[:, r, :])
-            ).reshape(m, nf, -1)
-        return vals[self.win.phase[w], pos, self.cached_table[w]]
+            ).reshape(n_cls, m, nf, -1)
+        return vals[self.cached_class[w], self.win.phase[w], pos, self.cached_table[w]]
 
     def _direct_integrals(self, w: np.ndarray, dt: np.ndarray) -> np.ndarray:
         """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine times of direct windows.
@@ -768,23 +895,47 @@ class _Run:
         key = np.stack(
             [win.n[wins], np.rint(length * 1e6), np.rint(dt[first_pt] * 1e6), counts], axis=1
         ).astype(np.int64)
-        shapes, shape_of = np.unique(key, axis=0, return_inverse=True)
+        shapes, shape_of, shape_count = np.unique(
+            key, axis=0, return_inverse=True, return_counts=True
+        )
         shape_of = shape_of.reshape(-1)
-        for sh in range(len(shapes)):
+        for sh in np.flatnonzero(shape_count > 1):
             members = np.flatnonzero(shape_of == sh)
             m = int(win.n[wins[members[0]]])
-            node = self.direct_first[wins[members]][:, None] + np.arange(m)[None, :]  # (Wg, m)
-            shift = self.direct_t[node] - win.a[wins[members]][:, None]
-            g = self.direct_u[node] * np.exp(-lam[None, None, :] * shift[..., None])  # (Wg,m,R)
+            g = self._direct_g(wins[members], m)  # (Wg, m, R)
             half = 0.5 * length[members[0]]
             cnt = int(counts[members[0]])
             # Points of one window are consecutive (sorted times): first_pt .. + count.
             pts = first_pt[members][:, None] + np.arange(cnt)[None, :]  # (Wg, cnt)
-            x = dt[pts[0]] / half - 1.0
-            jmat = integration_matrix(x, m) * half  # (cnt, m), shared by the group
+            jmat = integration_matrix(dt[pts[0]] / half - 1.0, m) * half  # (cnt, m), shared
             vals = np.tensordot(jmat, g, axes=([1], [1]))  # (cnt, Wg, R)
             out[pts.T.ravel()] = vals.reshape(cnt * len(members), len(lam))
+        # Windows of a shape of their own (irregular stop times): point by point.
+        single = np.isin(shape_of, np.flatnonzero(shape_count == 1))
+        if np.any(single):
+            sel_w = wins[single]
+            pts = np.flatnonzero(np.isin(w, sel_w))
+            n_w = win.n[w[pts]]
+            for m in np.unique(n_w):
+                sub = pts[n_w == m]
+                ws, inverse = np.unique(w[sub], return_inverse=True)
+                coef = np.tensordot(
+                    coefficient_matrix(int(m)), self._direct_g(ws, int(m)), axes=([1], [1])
+                )  # (m, Ws, R)
+                half = 0.5 * (win.b[w[sub]] - win.a[w[sub]])
+                ints = integral_of_series(dt[sub] / half - 1.0, int(m))  # (F, m)
+                inv = inverse.reshape(-1)
+                acc = np.zeros((len(sub), len(lam)), dtype=complex)
+                for k in range(int(m)):
+                    acc += ints[:, k, None] * coef[k][inv]
+                out[sub] = half[:, None] * acc
         return out
+
+    def _direct_g(self, wins: np.ndarray, m: int) -> np.ndarray:
+        """``e^{-lambda (s - a)} u(s)`` at the nodes of direct windows ``wins`` (W, m, R)."""
+        node = self.direct_first[wins][:, None] + np.arange(m)[None, :]
+        shift = self.direct_t[node] - self.win.a[wins][:, None]
+        return self.direct_u[node] * np.exp(-self.lam[None, None, :] * shift[..., None])
 
 
 def _vehicle_forms(a_sig: np.ndarray, mats: np.ndarray) -> np.ndarray:

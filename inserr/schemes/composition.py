@@ -181,13 +181,10 @@ class ScheduleHistory:
         kind = np.array(self.table.kind)[k]
         vehicle = self.motion.rate_bound(a, b)
         gimbal = np.where(kind == "rotate", np.abs(self.table.rate[k]), 0.0)
-        iso = np.flatnonzero(kind == "isolate")
-        if len(iso):
-            # Sample the isolation rate densely enough to bound it (it follows the yaw).
-            frac = np.linspace(0.0, 1.0, 33)[1:-1]
-            t = a[iso, None] + frac[None, :] * (b - a)[iso, None]
-            rate = np.abs(self._isolation_rate(t.ravel(), np.repeat(k[iso], len(frac))))
-            gimbal[iso] = 1.5 * rate.reshape(len(iso), -1).max(axis=1) + vehicle[iso]
+        # Isolation: the table cancels the yaw, so the IMU turns at the target rate; the
+        # vehicle still wobbles the tilt through the gimbal at its own bandwidth.
+        iso = kind == "isolate"
+        gimbal[iso] = np.abs(self.table.target_rate[k[iso]])
         still = (kind == "stop") & (vehicle == 0.0)
         stop = kind == "stop"
         table = np.full((len(k), 3, 3), np.nan)
@@ -195,7 +192,32 @@ class ScheduleHistory:
             table[stop] = table_dcm(
                 self.table.a0[k[stop]], self.table.b0[k[stop]], self.table.mounting
             )
-        return Pieces(self._breaks, vehicle + gimbal, still, table, self.motion.repeat_period())
+        # Constant angular velocity: a still vehicle with the table stopped or turning, or
+        # a vehicle turning at a constant rate (a turn, a piece of a heading history)
+        # with the table stopped.
+        steady = self.motion.constant_rate(a, b)
+        constant = ((kind == "stop") & steady) | ((kind == "rotate") & (vehicle == 0.0))
+        # Phase classes (with a periodic vehicle): stops see the vehicle through a fixed
+        # table (class 0); isolation holds of one target heading are one function of the
+        # vehicle phase each (classes 1, 2, ...).
+        period = self.motion.repeat_period()
+        phase_class = np.full(len(k), -1)
+        if period is not None:
+            phase_class[stop] = 0
+            hold = (kind == "isolate") & (self.table.target_rate[k] == 0.0)
+            if np.any(hold):
+                target = np.round(np.mod(self.table.target_heading[k[hold]], 2 * np.pi), 9)
+                _, cls = np.unique(target, return_inverse=True)
+                phase_class[hold] = 1 + cls.reshape(-1)
+        return Pieces(
+            self._breaks,
+            vehicle + gimbal,
+            still,
+            table,
+            period,
+            constant,
+            phase_class,
+        )
 
     def timeline(self, substep: float = 1.0) -> Timeline:
         """The same history as a :class:`~inserr.model.timeline.Timeline` (:func:`build_timeline`).

@@ -167,6 +167,13 @@ class Motion:
         """
         return np.zeros(np.shape(a))
 
+    def constant_rate(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Whether the heading rate is constant over each ``[a_i, b_i]`` (bool array).
+
+        True for a static base, a steady turn, and a heading history between samples.
+        """
+        return np.ones(np.shape(a), dtype=bool)
+
     def repeat_period(self) -> float | None:
         """Period after which the body attitude repeats exactly, s (None if it never does).
 
@@ -247,6 +254,13 @@ class YawSwing(Motion):
         if self.amplitude == 0.0:
             return np.zeros(np.shape(a))
         return np.full(np.shape(a), abs(self.amplitude) + 2.0 * math.pi / self.period)
+
+    def constant_rate(self, a, b):
+        """Constant only without swing.
+
+        Arguments, returns and units as :meth:`Motion.constant_rate`.
+        """
+        return np.full(np.shape(a), self.amplitude == 0.0)
 
     def repeat_period(self):
         """The swing period (None without swing).
@@ -373,6 +387,15 @@ class HeadingHistory(Motion):
     def is_static(self) -> bool:
         """True if every sampled heading equals the first."""
         return bool(np.all(self.headings == self.headings[0]))
+
+    def constant_rate(self, a, b):
+        """Constant within one sample interval of the history.
+
+        Arguments, returns and units as :meth:`Motion.constant_rate`.
+        """
+        i0 = np.searchsorted(self.times, a, side="right") - 1
+        i1 = np.searchsorted(self.times, b, side="left") - 1
+        return np.asarray(i1 <= i0)
 
     def rate_bound(self, a, b):
         """Largest heading rate of the sample intervals that overlap each ``[a_i, b_i]``.
