@@ -143,9 +143,8 @@ def main(argv: list[str] | None = None) -> None:
 
     mem_hours = (72.0,) if args.quick else (72.0, 720.0)
     for h in mem_hours:
-        print(
-            f"peak memory, {h:g} h swinging-base inserr drift: {peak_memory_mb(h, 'two-position'):.0f} MB"
-        )
+        mb = peak_memory_mb(h, "two-position")
+        print(f"peak memory, {h:g} h swinging-base inserr drift: {mb:.0f} MB")
 
     t_static = best_of(lambda: run_scheme(static, "two-position"))
     n_static = naive_seconds(static, "two-position")
