@@ -335,3 +335,31 @@ def test_quadrature_is_converged(monkeypatch, scheme):
         _relative(finer.source_horizontal.reshape(n, -1), ref.source_horizontal.reshape(n, -1))
         < 1e-11
     )
+
+
+@pytest.mark.parametrize("engine", ["fast", "exact"])
+def test_vertical_gyro_bias_drifts_east_at_r_b_sin_cos_and_leaves_heading_bounded(engine):
+    # Closed form (docs/theory.md, 4.1): the zero mode (psi along the Earth axis) grows
+    # as -b sin L t; the Schuler loop keeps the true tilt bounded, so dr_E grows at
+    # R_N b sin L cos L and the secular heading terms cancel. Everything else is a sum of
+    # sinusoids at the mode frequencies, so a least-squares fit on [1, t, sinusoids] is
+    # exact up to round-off.
+    from inserr.model.psi_model import modes
+
+    site = Site.from_degrees(34.0)
+    b = 0.01 * DEG_PER_HOUR
+    imu = ImuErrors(gyro_bias=np.array([0.0, 0.0, b]))
+    hist = ScheduleHistory(
+        build_scheme("none", 6 * DEG, 300.0).plan(Motion(), 72 * 3600.0), Motion(), 72 * 3600.0
+    )
+    res = analyze_drift(site, imu, InitialErrors(), hist, dt_out=60.0, engine=engine)
+    ev = modes(ErrorModel(site)).eigenvalues
+    freqs = np.unique(np.round(np.abs(ev.imag[ev.imag > 1e-9]), 15))
+    t = res.t
+    basis = np.stack([np.ones_like(t), t] + [f(w * t) for w in freqs for f in (np.cos, np.sin)], 1)
+    slope_e = np.linalg.lstsq(basis, res.nav[:, 6], rcond=None)[0][1]
+    slope_h = np.linalg.lstsq(basis, res.attitude[:, 2], rcond=None)[0][1]
+    lat = math.radians(34.0)
+    expected = site.r_n * b * math.sin(lat) * math.cos(lat)
+    assert math.isclose(slope_e, expected, rel_tol=1e-9)
+    assert abs(slope_h) < 1e-9 * b  # rad/s: no secular heading drift
