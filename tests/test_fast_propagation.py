@@ -337,8 +337,9 @@ def test_quadrature_is_converged(monkeypatch, scheme):
     )
 
 
-@pytest.mark.parametrize("engine", ["fast", "exact"])
-def test_vertical_gyro_bias_drifts_east_at_r_b_sin_cos_and_leaves_heading_bounded(engine):
+# The step engine chains 4320 expm steps of 60 s: its round-off grows to ~4e-9.
+@pytest.mark.parametrize(("engine", "rtol"), [("fast", 1e-10), ("exact", 1e-8)])
+def test_vertical_gyro_bias_drifts_east_at_r_b_sin_cos_and_leaves_heading_bounded(engine, rtol):
     # Closed form (docs/theory.md, 4.1): the zero mode (psi along the Earth axis) grows
     # as -b sin L t; the Schuler loop keeps the true tilt bounded, so dr_E grows at
     # R_N b sin L cos L and the secular heading terms cancel. Everything else is a sum of
@@ -361,5 +362,5 @@ def test_vertical_gyro_bias_drifts_east_at_r_b_sin_cos_and_leaves_heading_bounde
     slope_h = np.linalg.lstsq(basis, res.attitude[:, 2], rcond=None)[0][1]
     lat = math.radians(34.0)
     expected = site.r_n * b * math.sin(lat) * math.cos(lat)
-    assert math.isclose(slope_e, expected, rel_tol=1e-9)
+    assert math.isclose(slope_e, expected, rel_tol=rtol)
     assert abs(slope_h) < 1e-9 * b  # rad/s: no secular heading drift
