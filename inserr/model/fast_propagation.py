@@ -230,25 +230,35 @@ def _cacheable(pieces: Pieces) -> np.ndarray:
 def phase_step(pieces: Pieces, t_coarse: np.ndarray, dt_fine: float | None, fastest: float):
     """Step of the phase grid on which the vehicle part is reused, or None.
 
-    The step divides the vehicle period, keeps a window's phase within
-    :data:`~inserr.model.quadrature.MAX_PHASE`, is a multiple of the fine output step
-    (so fine times sit at the same places in every window of a phase) and, where it
-    can, divides the coarse step (so coarse times do not cut phase windows).
+    The step divides the vehicle period and keeps a window's phase within
+    :data:`~inserr.model.quadrature.MAX_PHASE`. Among such steps, preferably one that
+    divides the coarse step (coarse times then never cut a phase window) and is a
+    multiple of the fine output step (fine times then sit at the same offsets in
+    every window, and their integrals are tabulated once).
     """
     period = pieces.vehicle_period
     if period is None or pieces.phase_class is None:
         return None
     fixed = _cacheable(pieces)
-    if not np.any(fixed) or dt_fine is None:
+    if not np.any(fixed):
         return None
     rate = 2.0 * float(pieces.bandwidth[fixed].max()) + fastest
     m_min = max(1, int(np.ceil(period * rate / MAX_PHASE)))
     dt_c = float(t_coarse[1] - t_coarse[0]) if len(t_coarse) > 1 else period
-    fine_ok = [m for m in range(m_min, m_min + 400) if _is_multiple(period / m, dt_fine)]
-    for m in fine_ok:
-        if _is_multiple(dt_c, period / m):
-            return period / m
-    return period / fine_ok[0] if fine_ok else None
+
+    def score(m: int) -> int:
+        g = period / m
+        fine = dt_fine is not None and _is_multiple(g, dt_fine)
+        return 2 * int(_is_multiple(dt_c, g)) + int(fine)
+
+    candidates = range(m_min, m_min + 400)
+    best = max(candidates, key=lambda m: (score(m), -m))
+    return period / best
+
+
+def fine_aligned(step: float | None, dt_fine: float | None) -> bool:
+    """Whether fine output times fall at the same offsets in every phase window."""
+    return step is not None and dt_fine is not None and _is_multiple(step, dt_fine)
 
 
 def make_windows(
@@ -851,10 +861,12 @@ class _Run:
             )
         c = np.flatnonzero(kind == CACHED)
         if len(c):
-            pos = np.clip(np.round(dt[c] / dt_fine).astype(int) - 1, 0, None)
-            out[c] = table.exp(c) * (
-                self.z_start[w[c]] + self._cached_integrals(w[c], pos, dt_fine)
-            )
+            if fine_aligned(self.step, dt_fine):
+                pos = np.clip(np.round(dt[c] / dt_fine).astype(int) - 1, 0, None)
+                ints = self._cached_integrals(w[c], pos, dt_fine)
+            else:
+                ints = self._cached_integrals_anywhere(w[c], dt[c])
+            out[c] = table.exp(c) * (self.z_start[w[c]] + ints)
         d = np.flatnonzero(kind == DIRECT)
         if len(d):
             out[d] = table.exp(d) * (self.z_start[w[d]] + self._direct_integrals(w[d], dt[d]))
@@ -879,6 +891,31 @@ class _Run:
                 _apply_form(h.real, forms[:, r, :]) + 1j * _apply_form(h.imag, forms[:, r, :])
             ).reshape(n_cls, m, nf, -1)
         return vals[self.cached_class[w], self.win.phase[w], pos, self.cached_table[w]]
+
+    def _cached_integrals_anywhere(self, w: np.ndarray, dt: np.ndarray) -> np.ndarray:
+        """As :meth:`_cached_integrals` for fine times at any offset (grid not aligned).
+
+        The template's signed input of each (class, phase, table) is turned into its
+        Chebyshev series once; each fine time then integrates the series to its offset.
+        """
+        n, s_nodes, fv = self.cached_template
+        lam, step = self.lam, self.step
+        key = (self.cached_class[w] * fv.shape[1] + self.win.phase[w]) * len(
+            self.cached_forms
+        ) + self.cached_table[w]
+        keys, inv = np.unique(key, return_inverse=True)
+        inv = inv.reshape(-1)
+        nt, m = len(self.cached_forms), fv.shape[1]
+        c_, p_, t_ = keys // (nt * m), (keys // nt) % m, keys % nt
+        forms = self.cached_forms[t_]  # (K, R, 63)
+        u = np.einsum("kqv,krv->kqr", fv[c_, p_], forms)  # (K, n, R) signed input at nodes
+        g = u * np.exp(-lam[None, None, :] * s_nodes[None, :, None])
+        coef = np.tensordot(coefficient_matrix(n), g, axes=([1], [1]))  # (n, K, R)
+        ints = integral_of_series(dt / (0.5 * step) - 1.0, n)  # (F, n)
+        acc = np.zeros((len(w), len(lam)), dtype=complex)
+        for k in range(n):
+            acc += ints[:, k, None] * coef[k][inv]
+        return 0.5 * step * acc
 
     def _direct_integrals(self, w: np.ndarray, dt: np.ndarray) -> np.ndarray:
         """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine times of direct windows.
