@@ -405,6 +405,25 @@ def test_analysis_tables_are_declared_and_validated(tmp_path):
         assert exc.value.field == field
 
 
+def test_every_analysis_scenario_runs_under_its_command(capsys):
+    """The analyses' scenario files are ordinary scenarios of their study."""
+    a = ROOT / "analyses"
+    for argv in (
+        ["align", str(a / "alignment_observability/scenario.toml"), "--duration", "1min"],
+        ["calibrate", str(a / "p1_calibration/scenario.toml"), "--runs", "2"],
+        [
+            "northfind",
+            str(a / "p3_northfinder/scenario.toml"),
+            "--runs",
+            "2",
+            "--duration",
+            "1min",
+        ],  # fmt: skip
+    ):
+        assert main([*argv, "--json"]) == 0, argv
+        json.loads(capsys.readouterr().out)
+
+
 # --- the documentation ------------------------------------------------------------------
 
 
