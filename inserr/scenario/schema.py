@@ -243,6 +243,10 @@ STUDY_DEFAULTS: dict[str, dict[str, Any]] = {
     },
 }
 
+#: The sections every scenario parses at once (what the drift engine reads).
+_CORE_SECTIONS = frozenset(
+    {"scenario", "site", "imu", "initial", "motion", "scheme", "output", "compare"}
+)
 #: Studies that build ``scheme.name`` (and ``compare.schemes``) as an indexing scheme;
 #: the north finder's table turns continuously at ``scheme.rate`` (either sign).
 _SCHEME_STUDIES = frozenset({"drift", "alignment", "calibration"})
@@ -316,8 +320,20 @@ class Scenario:
     )
 
     def value(self, key: str) -> Any:
-        """The validated value of a dotted key, SI (e.g. ``value("alignment.zupt_rate")``)."""
-        return self.values[key]
+        """The validated value of a dotted key, SI (e.g. ``value("alignment.zupt_rate")``).
+
+        Raises
+        ------
+        KeyError
+            For a key that is neither in :data:`SCHEMA` nor a declared analysis key.
+        """
+        if key in self.values:
+            return self.values[key]
+        section, _, name = key.partition(".")
+        if section not in _CORE_SECTIONS and name in SCHEMA.get(section, {}):
+            # A study key left at its default: parsed on demand (defaults are valid).
+            return _value(SCHEMA[section][name], key, study_default(key, self.study))
+        raise KeyError(key)
 
     def given(self, key: str) -> bool:
         """Whether the dotted key was written (in the file or by a flag), not defaulted."""
@@ -578,10 +594,14 @@ def scenario_from_dict(
     values: dict[str, Any] = {}
     for section, keys in SCHEMA.items():
         given = raw.get(section, {})
+        # The study sections are parsed when given (to validate them) and otherwise
+        # only when read (Scenario.value): the drift engine does not pay for them.
+        core = section in _CORE_SECTIONS
         for key, spec in keys.items():
-            dotted = f"{section}.{key}"
-            default = defaults.get(dotted, spec.default)
-            values[dotted] = _value(spec, dotted, given.get(key, default))
+            if core or key in given:
+                dotted = f"{section}.{key}"
+                default = defaults.get(dotted, spec.default)
+                values[dotted] = _value(spec, dotted, given.get(key, default))
     if analysis is not None:
         values.update(_analysis_values(raw.get(ANALYSIS, {}), analysis))
 
