@@ -101,9 +101,7 @@ def flag_table() -> str:
         keys = ", ".join(f"`{k}`" for k in flag.keys)
         commands = ", ".join(offered.get(name, []))
         unit = flag.unit or ("written with the value" if flag.spec.kind in UNITS else "")
-        lines.append(
-            f"| `--{name}` | {keys} | {_cell(unit)} | {_cell(flag.help)} | {commands} |"
-        )
+        lines.append(f"| `--{name}` | {keys} | {_cell(unit)} | {_cell(flag.help)} | {commands} |")
     return "\n".join(lines) + "\n"
 
 

@@ -448,3 +448,24 @@ def test_help_shows_the_study_default():
     assert study_default("scenario.runs", "calibration") == 100
     # Quantities in the study default parse with the flag's unit.
     assert parse_quantity("60", "time", "f", default_unit="s") == 60.0
+
+
+def test_align_runs_the_scheme_then_the_compared_ones():
+    """As ``inserr run``: scheme.name when given (or alone), then compare.schemes."""
+    from inserr.alignment.inputs import alignment_inputs
+
+    def names(data):
+        return alignment_inputs(scenario_from_dict(data, study="alignment")).schemes
+
+    assert names({}) == ("none",)
+    two_four = {"compare": {"schemes": ["two-position", "four-position"]}}
+    assert names(two_four) == ("two-position", "four-position")
+    assert names({**two_four, "scheme": {"name": "none"}}) == (
+        "none",
+        "two-position",
+        "four-position",
+    )
+    assert names({**two_four, "scheme": {"name": "two-position"}}) == (
+        "two-position",
+        "four-position",
+    )

@@ -8,7 +8,8 @@ vertical channel, a P0-grade IMU and a coarse-alignment prior; see
 
 Keys read
 ---------
-* the schemes: ``compare.schemes`` if given, else ``scheme.name``; their table
+* the schemes: ``scheme.name`` (when given, or when nothing else is) and then those of
+  ``compare.schemes``, as ``inserr run`` does; their table
   ``scheme.rate`` and ``scheme.stop``; the base ``site`` and ``motion``
   (``output.substep`` for continuous motion); the length ``scenario.duration``;
 * the IMU ``[imu]``: the gyro and accelerometer biases are both the prior 1 sigma of
@@ -133,7 +134,10 @@ def alignment_inputs(scen: Scenario) -> AlignmentInputs:
         vertical=scen.vertical,
         seed=scen.seed,
     )
-    schemes = tuple(scen.compare) or (scen.scheme_name,)
+    # As `inserr run`: the scheme, then the ones compared with it; the default scheme
+    # ("none") only when nothing else is named.
+    first = (scen.scheme_name,) if scen.given("scheme.name") or not scen.compare else ()
+    schemes = tuple(dict.fromkeys(first + tuple(scen.compare)))
     base = Base(scen.site, scen.motion, scen.scheme_rate, scen.scheme_stop, scen.substep)
     return AlignmentInputs(schemes, base, scen.duration, imu, prior, settings)
 

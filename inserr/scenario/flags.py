@@ -289,7 +289,7 @@ def default_text(name: str, study: str = "drift") -> str | None:
     """
     flag = FLAGS[name]
     if name == "yaw-swing":
-        return None if study_default("motion.type", study) != "yaw-swing" else "the scenario's"
+        return None  # no swing unless asked (motion.type static)
     value = study_default(flag.keys[0], study)
     if isinstance(value, bool):
         return None if not value else "on"
