@@ -614,7 +614,8 @@ class HeadingIsolation:
         turn = math.pi / self.rate
         pattern = [(-1.0, "180"), (-1.0, "360"), (+1.0, "180"), (+1.0, "0")]
         segs = [(self.stop, h0, 0.0, "hold 0")]
-        t, h = self.stop, h0  # the builder's clock: t += each duration
+        hold = max(self.stop, 0.0)  # the builder skips (and does not time) empty segments
+        t, h = hold, h0  # the builder's clock: t += each duration
         i = 0
         while t < duration:
             sign, lab = pattern[i % 4]
@@ -624,7 +625,7 @@ class HeadingIsolation:
             if t >= duration:
                 break
             segs.append((self.stop, h, 0.0, f"hold {lab}"))
-            t += self.stop
+            t += hold
             i += 1
         return segs
 
