@@ -601,6 +601,11 @@ class HeadingIsolation:
     (the table angle stays constant, ``tests/test_schedule.py``). Freezing the
     gimbals instead would let the first position swing with the yaw, which is
     exactly what the scheme is built to prevent.
+
+    ``meta["isolation_reversals"]`` counts the sign changes of the outer angle's
+    change between neighbouring samples at ``count_rate``, hour by hour (the pair
+    that straddles two hours is not compared), changes of at most 1e-9 rad left out
+    (:func:`_count_reversals`).
     """
 
     rate: float

@@ -72,6 +72,8 @@ PHASE_MODULUS = 0.5
 HISTORY_STOPS = 8
 #: Swing tests guessed before they are computed together (see NullingTwoPosition._periods).
 SWING_BATCH = 64
+#: Yaw-rate samples computed either side of a time where the rate may change sign.
+BREAK_SAMPLES = 3
 
 
 def yaw_rate_reversals(motion: Motion, duration: float, f: float) -> np.ndarray:
@@ -109,10 +111,6 @@ def yaw_rate_reversals(motion: Motion, duration: float, f: float) -> np.ndarray:
     k = k[(k >= 0) & (k <= math.floor(duration * f))]
     t = k / f
     return _sorted_unique(_sign_changes(t, motion.heading_rate(t), f))
-
-
-#: Samples computed either side of a time where the yaw rate may change sign.
-BREAK_SAMPLES = 3
 
 
 def _sorted_unique(x: np.ndarray) -> np.ndarray:
