@@ -441,6 +441,11 @@ class HeadingHistory(Motion):
 def heading_rate_bound(motion: Motion) -> float | None:
     """Bound on the absolute heading rate at every time, so ``|H(t) - H(s)| <= bound |t - s|``.
 
+    Unlike :meth:`Motion.rate_bound` (a frequency bound that sizes the fast engine's
+    quadrature, swing frequency included) this is a bound on ``|H'|`` alone, and it
+    is None for motion types this module does not define, so that callers relying on
+    it fall back to sampling.
+
     Parameters
     ----------
     motion : Motion
