@@ -27,12 +27,14 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "calibrate": ("inserr.cli.calibrate", "Multi-position gyro/accelerometer calibration."),
     "northfind": ("inserr.cli.northfind", "Rotation-modulation north finder (1 gyro, 1 accel)."),
     "sweep": ("inserr.cli.sweep", "Parameter sweep of a scenario on Dask."),
+    "design": ("inserr.cli.design", "Design an indexing schedule robust to the vehicle's motion."),
 }
 
 
-#: Commands whose ``--out`` is not a report directory replaced as a whole (a sweep's
-#: directory is a resumable store: :func:`inserr.sweep.store.check_sweep_dir`).
-_OWN_OUT_CHECK = frozenset({"sweep"})
+#: Commands whose ``--out`` is not a report directory replaced as a whole (a sweep's and a
+#: design's directories are resumable stores: :func:`inserr.sweep.store.check_sweep_dir`,
+#: :func:`inserr.design.study.check_design_dir`).
+_OWN_OUT_CHECK = frozenset({"sweep", "design"})
 
 
 def available_commands() -> dict[str, tuple[str, str]]:
@@ -92,11 +94,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"inserr {args.command}: error: {name_the_flag(exc, args)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        what = (
-            "finished points are kept; rerun with the same --out to resume"
-            if args.command == "sweep"
-            else "no partial report was kept"
-        )
+        what = {
+            "sweep": "finished points are kept; rerun with the same --out to resume",
+            "design": "finished evaluations are kept; rerun with the same --out to resume",
+        }.get(args.command, "no partial report was kept")
         print(f"inserr {args.command}: interrupted; {what}", file=sys.stderr)
         return 130
 

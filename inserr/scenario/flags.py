@@ -239,14 +239,22 @@ FLAGS: dict[str, Flag] = {
         "x,y,z or AMP,PERIOD values in brackets: gyro-bias=[0.01,0.02,0.03],0.02",
         "NAME=V1,V2,...",
     ),
+    # [design]
+    "family": _F("design.family", None, "schedules searched"),
+    "motions": _F("design.motions", None, "motion set designed for"),
+    "budget": _F("design.budget", None, "candidate schedules the optimizer evaluates", "N"),
+    "max-starts": _F(
+        "design.max_starts", None, "motor starts per hour at most: none = the two-position cycle's"
+    ),
+    "held-out": _F("design.held_out", None, "random motions drawn for the robustness check", "N"),
 }
 
 #: Flags that say how or where to run, not what: they override no scenario key.
 CONTROLS: dict[str, str] = {
     "out": "output directory",
     "json": "print JSON on stdout",
-    "scheduler": "Dask scheduler of a sweep",
-    "workers": "local worker processes of a sweep",
+    "scheduler": "Dask scheduler of a sweep or a design",
+    "workers": "local worker processes of a sweep or a design",
     "no-plots": "no summary plots for a sweep",
 }
 
@@ -275,6 +283,8 @@ SCHEME = ("scheme", "rate", "stop", "reversal", "delta", "variant")
 OUTPUT = ("step", "covariance-step", "substep", "vertical", "engine")
 #: The scenario flags of ``drift`` (and ``compare``, ``validate``, ``sweep``).
 DRIFT = ("duration", *SITE, *IMU_FLAGS, *INITIAL, *MOTION, *SCHEME, *OUTPUT)
+#: The flags of ``design`` beyond :data:`DRIFT`.
+DESIGN = ("seed", "family", "motions", "budget", "max-starts", "held-out")
 
 
 def dest(name: str) -> str:

@@ -4,7 +4,7 @@ A scenario is a nested table of sections. The drift engine reads ``scenario``,
 ``site``, ``imu``, ``initial``, ``motion``, ``scheme``, ``output`` and ``compare``;
 the studies built on the same inputs read those too and have one section each for
 what is theirs alone (``alignment``, ``observability``, ``calibration``,
-``northfinder``, ``validate``, ``sweep``). Physical values are strings carrying
+``northfinder``, ``validate``, ``sweep``, ``design``). Physical values are strings carrying
 their unit (``gyro_bias = "0.02 deg/h"``, ``"0.01,0.02,0.03 deg/h"`` for the three
 IMU axes). CLI flags are translated into the same nested table
 (:mod:`inserr.scenario.flags`) and go through :func:`scenario_from_dict` too, so a
@@ -125,6 +125,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "decision_rate": _K("frequency", None, "100 Hz", "closed-loop schemes: decision rate"),
         "mounting": _K("angle", 3, "0 deg", "IMU on the inner gimbal: heading, pitch, roll"),
         "steps": _K("table-list", None, [], "custom: [[scheme.steps]] rotation table"),
+        "extension": _K(
+            "time", None, None, "nulling-two-position: longest lengthening of a stop (absent: stop)"
+        ),
     },
     "output": {
         "step": _K("time", None, "1 s", "output step of the deterministic run"),
@@ -184,6 +187,54 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "sweep": {
         "parameters": _K("list", None, [], "swept parameters, each NAME=V1,V2,..."),
     },
+    "design": {
+        "family": _K("str", None, "single-axis", "schedules searched"),
+        "stops": _K("int", None, 8, "single-axis, dual-axis: stops per cycle"),
+        "angle_step": _K("angle", None, "90 deg", "single-axis: table positions are multiples"),
+        "stop_range": _K(
+            "time", "list", None, "shortest, longest stop (absent: scheme.stop, 2 scheme.stop)"
+        ),
+        "rate_range": _K("angular_rate", "list", None, "table rates tried (absent: scheme.rate)"),
+        "extension_range": _K(
+            "time", "list", None, "nulling: lengthening allowed (absent: 0 s, 2 scheme.stop)"
+        ),
+        "delta_range": _K("float-list", None, [0.001, 0.1], "flexible: stop threshold tried"),
+        "motions": _K("str", None, "grid", "the motion set designed for"),
+        "periods": _K(
+            "time", "list", "20,30,45,60,90,120,165,240,330,480,660,1200 s", "grid: swing periods"
+        ),
+        "amplitudes": _K("angular_rate", "list", "1,3,6 deg/s", "grid: peak yaw rates"),
+        "headings": _K("angle", "list", [], "grid: vehicle headings (absent: motion.heading)"),
+        "draws": _K("int", None, 36, "random: motions drawn"),
+        "period_range": _K("time", "list", "20,1200 s", "random, held-out: swing period"),
+        "amplitude_range": _K(
+            "angular_rate", "list", "1,6 deg/s", "random, held-out: peak yaw rate"
+        ),
+        "heading_range": _K(
+            "angle", "list", [], "random, held-out: vehicle heading (absent: motion.heading)"
+        ),
+        "pitch_range": _K(
+            "angle", "list", [], "random, held-out: vehicle pitch (absent: motion.pitch)"
+        ),
+        "roll_range": _K(
+            "angle", "list", [], "random, held-out: vehicle roll (absent: motion.roll)"
+        ),
+        "files": _K("list", None, [], "files: heading-history CSV files (time_s, heading_deg)"),
+        "held_out": _K("int", None, 0, "random motions drawn for the robustness check"),
+        "exclude": _K("list", None, ["gyro_bias_z"], "error sources left out of the objective"),
+        "max_starts": _K(
+            "float", None, None, "motor starts per hour (absent: the two-position cycle's)"
+        ),
+        "max_turning": _K("float", None, 0.25, "largest fraction of the time spent turning"),
+        "table_range": _K("angle", None, "360 deg", "largest |gimbal angle| (no slip ring)"),
+        "budget": _K("int", None, 1500, "candidate schedules the optimizer evaluates"),
+        "population": _K("int", None, 30, "optimizer population"),
+        "screen_duration": _K(
+            "time", None, None, "horizon of the search (absent: scenario.duration)"
+        ),
+        "screen_step": _K("time", None, "600 s", "output step of the search's RMS"),
+        "verify": _K("int", None, 8, "candidates re-evaluated at the full horizon"),
+    },
 }
 
 #: Keys whose value is one of a few words.
@@ -192,6 +243,8 @@ CHOICES: dict[str, tuple[str, ...]] = {
     "output.vertical": ("clamped", "free"),
     "output.engine": ("fast", "exact"),
     "scheme.variant": ("threshold", "crossing"),
+    "design.family": ("single-axis", "nulling", "flexible", "dual-axis"),
+    "design.motions": ("grid", "random", "scenario", "files"),
     "observability.model": ("auto", "alignment10", "full"),
     "calibration.positioning_model": ("three-axis", "gimbal"),
     "calibration.design_sensors": ("gyro", "gyro+accel"),
@@ -396,6 +449,8 @@ def _options_for(name: str, opts: dict) -> dict:
         keep |= {"reversal"}
     if name in ("flexible-two-position", "nulling-two-position"):
         keep |= {"delta", "variant", "f"}
+    if name == "nulling-two-position":
+        keep |= {"extension"}
     if name == "custom":
         keep |= {"steps"}
     return {k: v for k, v in opts.items() if k in keep}
@@ -703,6 +758,10 @@ def scenario_from_dict(
         opts["mounting"] = body_to_nav(m[0], m[1], m[2])
     if sh["steps"]:
         opts["steps"] = _steps(sh["steps"])
+    if sh["extension"] is not None:
+        if sh["extension"] < 0:
+            raise InputError("scheme.extension", "must be >= 0 s", "give e.g. 300 s")
+        opts["extension"] = sh["extension"]
     scen = Scenario(
         name=sc["name"],
         duration=duration,

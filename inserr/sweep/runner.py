@@ -58,6 +58,9 @@ LOCAL_SCHEDULERS = ("processes", "threads", "sync")
 
 #: Called with (point id, worker result) as each point finishes.
 OnResult = Callable[[str, dict[str, Any]], None]
+#: A worker-side task function: payload text in, a picklable result dict out, never raising
+#: (:func:`run_point` for sweeps; :func:`inserr.design.objective.evaluate_task` for designs).
+TaskFunction = Callable[[str], dict[str, Any]]
 
 
 def default_workers() -> int:
@@ -156,11 +159,17 @@ class LocalEngine:
         One of :data:`LOCAL_SCHEDULERS`: ``"processes"``, ``"threads"`` or ``"sync"``.
     workers : int
         Worker processes or threads (1 for ``sync``).
+    keep_pool : bool
+        With ``processes``: keep the worker processes from one :meth:`run` to the next
+        (until :meth:`close`), for callers that run many small batches (a design runs
+        one per optimizer generation); by default each run starts its own.
     """
 
-    def __init__(self, scheduler: str, workers: int):
+    def __init__(self, scheduler: str, workers: int, keep_pool: bool = False):
         self.scheduler = scheduler
         self.workers = workers
+        self.keep_pool = keep_pool and scheduler == "processes"
+        self._pool = None
 
     def describe(self) -> str:
         """One line naming the engine, for the summary of a run.
@@ -172,7 +181,7 @@ class LocalEngine:
         """
         return f"dask {self.scheduler} scheduler, {self.workers} worker(s)"
 
-    def run(self, tasks: dict[str, str], on_result: OnResult) -> None:
+    def run(self, tasks: dict[str, str], on_result: OnResult, fn: TaskFunction = run_point) -> None:
         """Run ``tasks``, reporting each result as it arrives.
 
         A worker process that dies fails the points it was running (reported as
@@ -185,6 +194,8 @@ class LocalEngine:
         on_result : callable
             Called in this thread as ``on_result(point_id, result)`` once per
             point, with the dict of :func:`run_point`.
+        fn : callable
+            The task function run on each payload (default :func:`run_point`).
         """
         from concurrent.futures.process import BrokenProcessPool
 
@@ -192,8 +203,9 @@ class LocalEngine:
         while remaining:
             sink = _ResultSink(on_result)
             try:
-                self._compute(remaining, sink)
+                self._compute(remaining, sink, fn)
             except BrokenProcessPool as exc:
+                self._drop_pool()
                 # A worker process died; the points it ran are the suspects. The
                 # others were never started or already reported: go on without them.
                 for pid in sorted(sink.running):
@@ -211,11 +223,11 @@ class LocalEngine:
                     return
             remaining = {pid: p for pid, p in remaining.items() if pid not in sink.reported}
 
-    def _compute(self, tasks: dict[str, str], sink: _ResultSink) -> None:
+    def _compute(self, tasks: dict[str, str], sink: _ResultSink, fn: TaskFunction) -> None:
         import dask
 
         delayed = [
-            dask.delayed(run_point, pure=False)(p, dask_key_name=_task_key(pid))
+            dask.delayed(fn, pure=False)(p, dask_key_name=_task_key(pid))
             for pid, p in tasks.items()
         ]
         kwargs: dict[str, Any] = {"scheduler": self.scheduler}
@@ -224,10 +236,39 @@ class LocalEngine:
         if self.scheduler == "processes":
             kwargs["chunksize"] = 1
         with sink, _one_blas_thread_per_process(self.scheduler == "processes"):
+            if self.keep_pool:
+                kwargs["pool"] = self._kept_pool()
             dask.compute(*delayed, **kwargs)
 
+    def _kept_pool(self):
+        """The worker processes kept across runs (made as Dask makes its own pools)."""
+        if self._pool is None:
+            from concurrent.futures import ProcessPoolExecutor
+            from functools import partial
+
+            from dask.multiprocessing import get_context, initialize_worker_process
+
+            # As dask.multiprocessing.get does for its own pools: one hash seed for all.
+            if os.environ.get("PYTHONHASHSEED") in (None, "0"):
+                os.environ["PYTHONHASHSEED"] = "6640"
+            self._pool = ProcessPoolExecutor(
+                self.workers,
+                mp_context=get_context(),
+                initializer=partial(initialize_worker_process, user_initializer=None),
+            )
+        return self._pool
+
+    def _drop_pool(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
+
     def close(self) -> None:
-        """Release the engine (nothing to do: Dask's local pools end with each run)."""
+        """Release the engine: the kept worker processes, if any (Dask's own pools end
+        with each run)."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
 
 
 #: Environment variables that size the BLAS/OpenMP thread pools of a new process.
@@ -323,7 +364,7 @@ class ClusterEngine:
         """
         return f"dask.distributed cluster at {self.client.scheduler.address}"
 
-    def run(self, tasks: dict[str, str], on_result: OnResult) -> None:
+    def run(self, tasks: dict[str, str], on_result: OnResult, fn: TaskFunction = run_point) -> None:
         """Submit ``tasks`` to the cluster, reporting each result as it arrives.
 
         A point whose task fails on the cluster (e.g. ``KilledWorker`` after its
@@ -337,11 +378,14 @@ class ClusterEngine:
         on_result : callable
             Called in this thread as ``on_result(point_id, result)`` once per
             point, with the dict of :func:`run_point`.
+        fn : callable
+            The task function run on each payload (default :func:`run_point`); the
+            workers import it by name, so it must be a module-level function of inserr.
         """
         from distributed import as_completed
 
         futures = {
-            self.client.submit(run_point, p, key=_task_key(pid), pure=False): pid
+            self.client.submit(fn, p, key=_task_key(pid), pure=False): pid
             for pid, p in tasks.items()
         }
         try:
@@ -362,7 +406,9 @@ class ClusterEngine:
             self.client.close()
 
 
-def open_engine(scheduler: Any = None, workers: int | None = None) -> LocalEngine | ClusterEngine:
+def open_engine(
+    scheduler: Any = None, workers: int | None = None, keep_pool: bool = False
+) -> LocalEngine | ClusterEngine:
     """The engine for ``--scheduler`` / ``--workers`` (connects to a cluster now, before any work).
 
     Parameters
@@ -373,6 +419,8 @@ def open_engine(scheduler: Any = None, workers: int | None = None) -> LocalEngin
         or an engine already opened (returned as is).
     workers : int, optional
         Local workers (default: the CPUs available). Not allowed with a cluster.
+    keep_pool : bool
+        Local processes are kept from one run to the next (:class:`LocalEngine`).
 
     Returns
     -------
@@ -392,7 +440,7 @@ def open_engine(scheduler: Any = None, workers: int | None = None) -> LocalEngin
     if scheduler is None or scheduler in LOCAL_SCHEDULERS:
         n = workers or default_workers()
         name = scheduler or ("processes" if n > 1 else "sync")
-        return LocalEngine(name, 1 if name == "sync" else n)
+        return LocalEngine(name, 1 if name == "sync" else n, keep_pool)
     if isinstance(scheduler, str) and "://" not in scheduler and ":" not in scheduler:
         raise InputError(
             "scheduler",
