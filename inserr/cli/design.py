@@ -15,7 +15,6 @@ from inserr.cli.common import add_json_flag, emit, format_table, positive_int
 from inserr.scenario.flags import DESIGN, DRIFT, add_flags, scenario_from_args
 
 
-
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Add the arguments of ``inserr design`` to its parser.
 
