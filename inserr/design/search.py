@@ -133,6 +133,7 @@ class Evaluator:
         self.model = canonical(error_model_key(scen))
         self.computed = 0  # motion evaluations sent to the engine by this process
         self.elapsed = 0.0  # their worker time, s
+        self.batches = 0
 
     def _context(self, horizon: Horizon) -> str:
         return canonical({"horizon": horizon.as_dict(), "model": self.model})
@@ -151,15 +152,19 @@ class Evaluator:
         """
         keys = [self.keys(r) for r in requests]
         tasks: dict[str, str] = {}
+        # Task ids unique to the batch: a cluster keeps finished results by key for a while,
+        # and must not hand an earlier batch's result to a new task.
+        self.batches += 1
         for i, (req, ks) in enumerate(zip(requests, keys, strict=True)):
             out = self._outcome(req, ks)
             if out is None:
-                tasks[str(i)] = self._payload(req, ks)
+                tasks[f"b{self.batches}-{i}"] = self._payload(req, ks)
         if tasks:
             with Bar(total=len(tasks), desc=desc or "design", unit="candidate") as bar:
 
                 def on_result(tid: str, result: dict[str, Any]) -> None:
-                    self._store(requests[int(tid)], keys[int(tid)], result)
+                    i = int(tid.rsplit("-", 1)[1])
+                    self._store(requests[i], keys[i], result)
                     bar.update()
 
                 try:
@@ -296,6 +301,8 @@ class _Map:
         self.started = started
         self.generations: list[Generation] = []
         self.motion_evals = 0
+        self.feasible = 0  # candidates that reached the drift engine
+        self.budget: int | None = None
 
     def __call__(self, func, population):
         xs = [np.asarray(x, dtype=float) for x in population]
@@ -319,6 +326,7 @@ class _Map:
         for c, o in zip(cands, outs, strict=True):
             self.evaluated[canonical(c.desc["vars"])] = (c.desc["vars"], o)
             values.append(o.value)
+            self.feasible += bool(o.feasible)
             if o.complete and (self.best is None or o.value < self.best[0]):
                 self.best = (o.value, o.rms)
         if self.best is not None:  # hardest motions first: exits come sooner
@@ -332,8 +340,9 @@ class _Map:
         self.calls += 1
         return values
 
-    def callback(self, intermediate_result):
-        """DE's callback: the members' values are the next generation's thresholds."""
+    def callback(self, intermediate_result) -> bool:
+        """DE's callback: the members' values are the next generation's thresholds; stop
+        (return True) once the budget of feasible candidates is spent."""
         self.thresholds = np.array(intermediate_result.population_energies, dtype=float)
         self.generations.append(
             Generation(
@@ -344,6 +353,31 @@ class _Map:
                 time.perf_counter() - self.started,
             )
         )
+        return self.budget is not None and self.feasible >= self.budget
+
+
+def initial_population(family: Family, population: int, seed: int) -> np.ndarray:
+    """The first population: seeded Latin-hypercube members that obey the family's rules.
+
+    A family's rules (a balanced single-axis cycle within the stop range, a closed
+    dual-axis cycle) hold for a fraction of the box only; starting from members that
+    obey them spends no generation on finding that set. ``20 population`` members of a
+    seeded Latin hypercube are decoded, and the first ``population`` that obey the
+    rules are kept, in the hypercube's order (then the least violating ones, if fewer
+    do).
+    """
+    from scipy.stats import qmc
+
+    variables = family.variables()
+    lo = np.array([v.lower for v in variables], dtype=float)
+    hi = np.array([v.upper for v in variables], dtype=float)
+    integer = np.array([v.integer for v in variables])
+    rng = np.random.default_rng([seed, 2])
+    sample = lo + qmc.LatinHypercube(d=len(variables), rng=rng).random(20 * population) * (hi - lo)
+    sample[:, integer] = np.clip(np.round(sample[:, integer]), lo[integer], hi[integer])
+    cost = np.array([sum(family.decode(family.round(x)).violation.values()) for x in sample])
+    order = np.argsort(cost, kind="stable")  # zero cost first, in the hypercube's order
+    return sample[order[:population]]
 
 
 def optimize(
@@ -368,8 +402,9 @@ def optimize(
         The search horizon (the screening horizon when shorter than the run).
     limits : Limits
     budget : int
-        Candidates evaluated at most: the population, then ``budget // population - 1``
-        generations of it.
+        Candidates that obey the family's rules and the constraints to evaluate (with
+        the drift engine) before the search stops, at the end of a generation; the
+        others cost no drift analysis. At most ``20 budget / population`` generations.
     population : int
         Members of the population (>= 5).
     seed : int
@@ -380,22 +415,17 @@ def optimize(
     SearchResult
     """
     from scipy.optimize import differential_evolution
-    from scipy.stats import qmc
 
     variables = family.variables()
     lo = np.array([v.lower for v in variables], dtype=float)
     hi = np.array([v.upper for v in variables], dtype=float)
     integrality = np.array([v.integer for v in variables])
-    # A seeded Latin hypercube of exactly `population` members, then DE's own seed.
-    sample = qmc.LatinHypercube(d=len(variables), rng=np.random.default_rng([seed, 2])).random(
-        population
-    )
-    init = lo + sample * (hi - lo)
-    init[:, integrality] = np.clip(np.round(init[:, integrality]), lo[integrality], hi[integrality])
+    init = initial_population(family, population, seed)
     start = family.start()
     x0 = None if start is None else np.array(family.round(start), dtype=float)
-    generations = max(0, budget // population - 1)
+    generations = max(1, 20 * budget // population)
     mapper = _Map(family, evaluator, motions, horizon, limits, time.perf_counter())
+    mapper.budget = budget
     res = differential_evolution(
         _never_called,
         list(zip(lo, hi, strict=True)),

@@ -175,7 +175,7 @@ def design_settings(
         raise InputError(
             "design.budget",
             f"must be at least the population ({population}), got {budget}",
-            "e.g. 1500",
+            "e.g. 600",
         )
     verify = scen.value("design.verify")
     if verify < 1:

@@ -242,7 +242,7 @@ FLAGS: dict[str, Flag] = {
     # [design]
     "family": _F("design.family", None, "schedules searched"),
     "motions": _F("design.motions", None, "motion set designed for"),
-    "budget": _F("design.budget", None, "candidate schedules the optimizer evaluates", "N"),
+    "budget": _F("design.budget", None, "feasible candidates the optimizer evaluates", "N"),
     "max-starts": _F(
         "design.max_starts", None, "motor starts per hour at most: none = the two-position cycle's"
     ),

@@ -227,7 +227,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         ),
         "max_turning": _K("float", None, 0.25, "largest fraction of the time spent turning"),
         "table_range": _K("angle", None, "360 deg", "largest |gimbal angle| (no slip ring)"),
-        "budget": _K("int", None, 1500, "candidate schedules the optimizer evaluates"),
+        "budget": _K("int", None, 600, "feasible candidates the optimizer evaluates"),
         "population": _K("int", None, 30, "optimizer population"),
         "screen_duration": _K(
             "time", None, None, "horizon of the search (absent: scenario.duration)"

@@ -1,0 +1,161 @@
+"""Design for P0's vehicle (issue 17): the schedule robust to its swing, and for a static base.
+
+Reads ``scenario.toml`` beside this file: P0's site, IMU budget, initial errors,
+tilted vehicle and table; its ``[design]`` section is the single-axis family, P0's
+36-case swing grid (12 periods x 3 peak yaw rates) and 36 held-out swings. Two
+designs run through ``inserr.design.study.run_design`` (the code of ``inserr
+design``):
+
+* **P0 vehicle**: the design of the scenario as it is; the output directory is that
+  design's directory (resumable: rerun to resume, nothing is recomputed);
+* **static base**: the same vehicle at rest (``motion.type = static``), designed for
+  that one motion, in ``static/``.
+
+The write-up ``REPORT.md`` (generated, with ``results.json`` and the figures) holds
+the P0 design's report, the verdicts of issue 17 and the static-base design.
+
+    python analyses/design_p0/run.py [--quick] [--out DIR] [--workers N] [--scheduler ADDR]
+
+``--quick`` designs for 6 h runs, three swings and a small budget, into
+``results/quick/``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from inserr.design import figures
+from inserr.design.study import DesignOutcome, build_report, run_design
+from inserr.output.report import write_text_atomic
+from inserr.scenario.schema import load_scenario
+
+HERE = Path(__file__).resolve().parent
+QUICK = {
+    "scenario.duration": "6 h",
+    "design.periods": "30, 120, 660 s",
+    "design.amplitudes": "6 deg/s",
+    "design.held_out": 3,
+    "design.budget": 20,
+    "design.population": 10,
+    "design.verify": 3,
+    "design.screen_duration": "6 h",
+}
+STATIC = {"motion.type": "static", "design.motions": "scenario", "design.held_out": 0}
+
+
+def verdicts(o: DesignOutcome) -> list[str]:
+    """Issue 17's done-when, as sentences computed from the results."""
+    r = o.results
+    ch = r["chosen"]
+    cat = r["catalogue"]
+    trad = next(c for c in cat if c["label"] == "two-position")
+    best = min(cat, key=lambda c: c["worst_nmi"])
+    beaten = [c["label"] for c in cat if c["worst_nmi"] <= ch["worst_nmi"]]
+    out = [
+        f"On the motion set the designed schedule's worst RMS is {ch['worst_nmi']:.4g} nmi; "
+        f"the best catalogue scheme's is {best['worst_nmi']:.4g} nmi ({best['label']}). "
+        + (
+            "The designed schedule is below every catalogue scheme."
+            if not beaten
+            else f"It is NOT below: {', '.join(beaten)} do as well or better."
+        ),
+        f"Motor starts: {ch['starts_per_hour']:.4g} per hour against the traditional cycle's "
+        f"{trad['starts_per_hour']:.4g} "
+        + ("(no more)." if ch["starts_per_hour"] <= trad["starts_per_hour"] else "(MORE)."),
+    ]
+    if "held_out_worst_nmi" in ch:
+        hbest = min(
+            (c for c in cat if "held_out_worst_nmi" in c), key=lambda c: c["held_out_worst_nmi"]
+        )
+        held_beaten = [
+            c["label"] for c in cat if c.get("held_out_worst_nmi", 1e9) <= ch["held_out_worst_nmi"]
+        ]
+        out.append(
+            f"On the {len(ch['held_out_rms_nmi'])} held-out motions the designed schedule's "
+            f"worst RMS is {ch['held_out_worst_nmi']:.4g} nmi (at "
+            f"{ch['held_out_worst_motion']}); the best catalogue scheme's is "
+            f"{hbest['held_out_worst_nmi']:.4g} nmi ({hbest['label']}). "
+            + (
+                "The design holds on motions it never saw."
+                if not held_beaten
+                else f"It does NOT hold there: {', '.join(held_beaten)} do as well or better."
+            )
+        )
+    out.append(
+        f"Run time of the design: {r['seconds']:.0f} s ({r['engine']}; "
+        f"{r['motion_evaluations_computed']} motion evaluations computed, "
+        f"{r['evaluations_in_cache_at_start']} taken from the cache)."
+    )
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="6 h runs, 3 swings, results/quick/")
+    ap.add_argument("--out", default=None, help="output directory (default results/)")
+    ap.add_argument("--workers", type=int, default=None, help="local worker processes")
+    ap.add_argument("--scheduler", default=None, help="Dask scheduler (tcp://HOST:PORT)")
+    args = ap.parse_args(argv)
+    out = Path(args.out) if args.out else HERE / "results" / ("quick" if args.quick else "")
+    scen = load_scenario(HERE / "scenario.toml")
+    if args.quick:
+        scen = scen.with_changes(QUICK)
+    engine = {"scheduler": args.scheduler, "workers": args.workers}
+    p0 = run_design(scen, out_dir=out, markdown_name="REPORT.md", **engine)
+    print(f"P0 vehicle: chosen {p0.results['chosen']['label']}", file=sys.stderr)
+    static_scen = scen.with_changes(STATIC)
+    static = run_design(static_scen, out_dir=out / "static", markdown_name="REPORT.md", **engine)
+    print(f"static base: chosen {static.results['chosen']['label']}", file=sys.stderr)
+
+    rep = build_report(scen, p0, "Designing the indexing schedule for P0's vehicle (issue 17)")
+    rep.heading("Verdicts (issue 17)")
+    for line in verdicts(p0):
+        rep.paragraph(line)
+    rep.heading("A static base")
+    st = static.results
+    rep.paragraph(
+        f"The same vehicle at rest, designed for that one motion (same family, budget and "
+        f"constraints; full report in `static/REPORT.md`): chosen "
+        f"{st['chosen']['label']}, RMS {st['chosen']['worst_nmi']:.4g} nmi at "
+        f"{st['chosen']['starts_per_hour']:.4g} motor starts per hour."
+    )
+    rows = [st["chosen"]] + st["catalogue"]
+    rep.table(
+        ["scheme", "RMS (nmi)", "starts/h", "meets constraints"],
+        [
+            [
+                ("designed: " if c is st["chosen"] else "") + c["label"][:60],
+                c["worst_nmi"],
+                c["starts_per_hour"],
+                "yes" if c["meets_constraints"] else "no",
+            ]
+            for c in sorted(rows, key=lambda c: c["worst_nmi"])
+        ],  # fmt: skip
+    )
+    rep.figure(
+        figures.comparison(
+            [
+                {
+                    "label": "designed" if c is st["chosen"] else c["label"],
+                    "values": c["rms_nmi"],
+                    "designed": c is st["chosen"],
+                    "feasible": c["meets_constraints"],
+                }
+                for c in rows
+            ],  # fmt: skip
+            "Static base",
+        ),
+        "compare_static",
+        "Static base: the designed schedule and every catalogue scheme",
+    )
+    rep.results = {"p0_vehicle": p0.results, "static_base": static.results}
+    rep.write_into(out, markdown_name="REPORT.md")
+    write_text_atomic(out / "report.html", rep.html())
+    print(out / "REPORT.md")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
