@@ -289,10 +289,10 @@ def run(args: argparse.Namespace) -> int:
     )
     pset = _position_set(args, rate, settle)
 
+    from inserr.calibration.report import build_report
     from inserr.calibration.summary import (
         PARAMETER_HEADER,
         SENSITIVITY_HEADER,
-        build_report,
         calibration_summary,
         parameter_rows,
         sensitivity_axes_text,

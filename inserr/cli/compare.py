@@ -22,7 +22,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.drift.study import build_report, metrics_table, run_scheme
+    from inserr.drift.report import build_report
+    from inserr.drift.study import metrics_table, run_scheme
 
     scen = scenario_from_args(args)
     names = tuple(s.strip() for s in args.schemes.split(",")) if args.schemes else scen.compare

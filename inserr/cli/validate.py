@@ -66,6 +66,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from inserr.core.units import HOUR
+    from inserr.reference.report import build_report
     from inserr.reference.strapdown import require_pyins
     from inserr.reference.validation import validate
 
@@ -81,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
         random_constants=args.random_constants,
     )
     if args.out:
-        v.report().write(args.out)
+        build_report(v).write(args.out)
     s = v.summary()
     rows = [
         [k, v_]
