@@ -330,8 +330,6 @@ class Report:
         for b in self.blocks:
             if b.kind == "figure":
                 name, _, png = b.payload
-                if f"{name}.png" in out:
-                    raise ValueError(f"two figures of report {self.title!r} are named {name!r}")
                 out[f"{name}.png"] = png
         out["results.json"] = dumps(self.results).encode("utf-8")
         return out
@@ -345,8 +343,10 @@ class Report:
         replaced as a whole).
         """
         target = Path(out_dir).resolve()
-        for name, data in self.files(markdown_name).items():
-            write_bytes_atomic(target / name, data)
+        files = self.files(markdown_name)
+        # The Markdown last: it is the write-up's index, updated once all it links is there.
+        for name in sorted(files, key=lambda n: n == markdown_name):
+            write_bytes_atomic(target / name, files[name])
         return target
 
     def write(self, out_dir: str | os.PathLike, markdown_name: str = "report.md") -> Path:
