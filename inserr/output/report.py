@@ -208,12 +208,20 @@ class _Block:
 
 @dataclass
 class Report:
-    """An ordered collection of report blocks.
+    """A report: an ordered collection of blocks and the numbers behind them.
+
+    A study builds one (its ``build_report``), adding headings, paragraphs, tables,
+    Markdown text and figures and setting :attr:`results`; :meth:`write` (or
+    :meth:`write_into`) renders it, the same way for every study.
 
     Parameters
     ----------
     title : str
         Report title (first heading of both the Markdown and the HTML file).
+    blocks : list
+        The content, in order (filled by the methods below).
+    results : dict
+        Written as ``results.json`` (numpy values allowed, see :func:`dumps`).
     """
 
     title: str
