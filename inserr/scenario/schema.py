@@ -87,6 +87,7 @@ SCHEMA: dict[str, dict[str, tuple[str, int | None, Any]]] = {
         "covariance_step": ("time", None, "60 s"),
         "substep": ("time", None, "1 s"),
         "vertical": ("str", None, "clamped"),
+        "engine": ("str", None, "fast"),
     },
     "compare": {
         "schemes": ("list", None, []),
@@ -127,6 +128,7 @@ class Scenario:
     substep: float
     vertical: str
     compare: tuple[str, ...]
+    engine: str
     raw: dict = field(compare=False, repr=False)
     base_dir: Path | None = field(default=None, compare=False, repr=False)
 
@@ -146,6 +148,18 @@ class Scenario:
 
         table = self.scheme(name).plan(self.motion, self.duration)
         return build_timeline(table, self.motion, self.duration, self.substep)
+
+    def history(self, name: str | None = None):
+        """The exact IMU attitude history of the scenario's (or ``name``'s) scheme.
+
+        A :class:`~inserr.schemes.composition.ScheduleHistory`: the table schedule of the
+        scheme composed with the vehicle motion, without sub-steps.
+        """
+        from inserr.schemes.composition import ScheduleHistory
+
+        return ScheduleHistory(
+            self.scheme(name).plan(self.motion, self.duration), self.motion, self.duration
+        )
 
     def with_changes(self, changes: dict[str, Any]) -> Scenario:
         """A new scenario with dotted keys replaced (e.g. ``{"scheme.stop": "60 s"}``)."""
@@ -323,6 +337,8 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
                 f"use a coarser output.{key} (flag --{flag}) of at least "
                 f"{math.ceil(duration / MAX_SAMPLES * 1000.0) / 1000.0:g} s, or a shorter duration",
             )
+    if out["engine"] not in ("fast", "exact"):
+        raise InputError("output.engine", f"unknown engine {out['engine']!r}", "use fast or exact")
     if out["vertical"] not in ("clamped", "free"):
         raise InputError(
             "output.vertical", f"unknown mode {out['vertical']!r}", "use clamped or free"
@@ -357,6 +373,7 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
         substep=out["substep"],
         vertical=out["vertical"],
         compare=v["compare"]["schemes"],
+        engine=out["engine"],
         raw=raw,
         base_dir=base_dir,
     )
