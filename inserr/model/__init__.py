@@ -6,7 +6,13 @@
 * ``error_sources`` — the error sources and the initial augmented state they define.
 * ``timeline`` — the IMU attitude history as constant-angular-velocity intervals.
 * ``discretization`` — transition matrices and noise of each interval, cached.
-* ``exact_propagation`` — states and covariances propagated interval by interval.
+* ``exact_propagation`` — the step engine: states and covariances propagated interval by
+  interval (the reference).
+* ``attitude_history`` — the attitude history as the fast engine reads it: smooth pieces.
+* ``modal`` — modal form of the navigation-error dynamics at a fixed site.
+* ``quadrature`` — Chebyshev quadrature and spectral integration on one interval.
+* ``fast_propagation`` — the fast engine: constant errors and white noise through the
+  modal form, window by window.
 """
 
 from inserr.core.lazy import lazy_exports
@@ -27,6 +33,10 @@ __getattr__, __dir__ = lazy_exports(
         "propagate_covariance": "inserr.model.exact_propagation",
         "propagate_outputs": "inserr.model.exact_propagation",
         "propagate_states": "inserr.model.exact_propagation",
+        "AttitudeHistory": "inserr.model.attitude_history",
+        "NavModes": "inserr.model.modal",
+        "constant_error_response": "inserr.model.fast_propagation",
+        "white_noise_covariance": "inserr.model.fast_propagation",
     },
 )
 
@@ -44,4 +54,8 @@ __all__ = [
     "propagate_covariance",
     "propagate_outputs",
     "propagate_states",
+    "AttitudeHistory",
+    "NavModes",
+    "constant_error_response",
+    "white_noise_covariance",
 ]
