@@ -50,21 +50,31 @@ schemes = ["none", "two-position"]
 
 #: command -> its arguments (small runs; each writes a report with --out)
 COMMANDS = {
-    "drift": ["drift", "--scheme", "two-position", "--hours", "1", "--gyro-bias", "0.01"],
-    "compare": ["compare", "--hours", "1", "--schemes", "none,two-position", "--arw", "0.002"],
+    "drift": ["drift", "--scheme", "two-position", "--duration", "1 h", "--gyro-bias", "0.01"],
+    "compare": ["compare", "--duration", "1 h", "--schemes", "none,two-position", "--arw", "0.002"],
     "run": ["run", "{scenario}"],
-    "align": ["align", "--scheme", "none,two-position", "--minutes", "2"],
+    "align": ["align", "--schemes", "none,two-position", "--duration", "2 min"],
     "calibrate": ["calibrate", "--runs", "3"],
-    "northfind": ["northfind", "--lat", "34", "--heading", "30", "--runs", "2", "--minutes", "1"],
+    "northfind": [
+        "northfind",
+        "--lat",
+        "34",
+        "--heading",
+        "30",
+        "--runs",
+        "2",
+        "--duration",
+        "1 min",
+    ],
     "validate": [
         "validate",
-        "--hours",
-        "0.2",
+        "--duration",
+        "0.2 h",
         "--gyro-bias",
         "0.02",
         "--scheme",
         "two-position",
-        "--imu-rate",
+        "--sample-rate",
         "10",
     ],
 }

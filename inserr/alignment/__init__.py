@@ -2,6 +2,7 @@
 
 * ``filter`` — the alignment Kalman filter on the inserr error model
   (:func:`~inserr.alignment.filter.run_alignment`) and its figures of merit.
+* ``inputs`` — what the alignment and observability studies read from a scenario.
 * ``observability`` — observability of piecewise-constant systems: rank, null space, words.
 * ``study`` — the filter per scheme on one base, and the tables.
 * ``figures`` — σ(t) and estimation-error figures.
@@ -23,6 +24,8 @@ __getattr__, __dir__ = lazy_exports(
         "Base": "inserr.alignment.study",
         "run_schemes": "inserr.alignment.study",
         "build_report": "inserr.alignment.report",
+        "AlignmentInputs": "inserr.alignment.inputs",
+        "alignment_inputs": "inserr.alignment.inputs",
     },
 )
 
@@ -37,4 +40,6 @@ __all__ = [
     "Base",
     "run_schemes",
     "build_report",
+    "AlignmentInputs",
+    "alignment_inputs",
 ]

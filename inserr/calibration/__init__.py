@@ -1,6 +1,7 @@
 """Calibration: discrete multi-position calibration of a gyro and an accelerometer triad.
 
 * ``two_axis_table`` — two-axis tables and the IMU position sets they reach.
+* ``inputs`` — what a calibration study reads from a scenario.
 * ``estimation`` — measurement model, least squares, identifiability, Cramér-Rao bound,
   Monte Carlo.
 * ``position_sets`` — the position-set designer: precision per unit of table time.
@@ -25,6 +26,8 @@ __getattr__, __dir__ = lazy_exports(
         "design_sets": "inserr.calibration.position_sets",
         "calibration_summary": "inserr.calibration.summary",
         "build_report": "inserr.calibration.report",
+        "CalibrationInputs": "inserr.calibration.inputs",
+        "calibration_inputs": "inserr.calibration.inputs",
     },
 )
 
@@ -40,4 +43,6 @@ __all__ = [
     "design_sets",
     "calibration_summary",
     "build_report",
+    "CalibrationInputs",
+    "calibration_inputs",
 ]

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 from inserr.core.earth import Site
+from inserr.core.errors import InputError
 from inserr.core.units import ARCSEC, DEG, HOUR, MICRO_G, PPM
 from inserr.drift.analysis import DriftResult, analyze_drift
 from inserr.model.timeline import Timeline
@@ -164,3 +165,10 @@ def metrics_table(runs: list[SchemeRun]) -> tuple[list[str], list[list]]:
             ]
         )
     return header, rows
+
+
+def compared_schemes(scen: Scenario) -> tuple[str, ...]:
+    """The schemes of ``compare.schemes`` (validated with the scenario), or InputError."""
+    if not scen.compare:
+        raise InputError("compare.schemes", "no schemes to compare", "give a list of schemes")
+    return tuple(scen.compare)

@@ -1,6 +1,7 @@
 """North finder: one gyro and one accelerometer on a rotating table find north (P3).
 
 * ``instrument`` — the pose, the instrument and its exact sensor simulation.
+* ``inputs`` — what a north-finder study reads from a scenario.
 * ``bounds`` — Cramér-Rao lower bound on heading and latitude.
 * ``filter`` — the Kalman filter and the heading/latitude solution.
 * ``study`` — Monte Carlo repeatability beside the bound
@@ -25,6 +26,8 @@ __getattr__, __dir__ = lazy_exports(
         "MonteCarloResult": "inserr.northfinder.study",
         "monte_carlo": "inserr.northfinder.study",
         "build_report": "inserr.northfinder.report",
+        "NorthfinderInputs": "inserr.northfinder.inputs",
+        "northfinder_inputs": "inserr.northfinder.inputs",
     },
 )
 
@@ -40,4 +43,6 @@ __all__ = [
     "MonteCarloResult",
     "monte_carlo",
     "build_report",
+    "NorthfinderInputs",
+    "northfinder_inputs",
 ]

@@ -429,3 +429,108 @@ class HeadingHistory(Motion):
     def describe(self):
         """One-line human description."""
         return f"heading history of {len(self.times)} samples over {self.times[-1]:g} s"
+
+
+# ---------------------------------------------------------------------------------------
+# What the closed-loop planners may assume about a motion without sampling it at 100 Hz
+# ---------------------------------------------------------------------------------------
+# Only the motions defined above are known here; a planner given any other Motion
+# subclass (None below) samples it at the decision rate, as it always did.
+
+
+def heading_rate_bound(motion: Motion) -> float | None:
+    """Bound on the absolute heading rate at every time, so ``|H(t) - H(s)| <= bound |t - s|``.
+
+    Unlike :meth:`Motion.rate_bound` (a frequency bound that sizes the fast engine's
+    quadrature, swing frequency included) this is a bound on ``|H'|`` alone, and it
+    is None for motion types this module does not define, so that callers relying on
+    it fall back to sampling.
+
+    Parameters
+    ----------
+    motion : Motion
+        Vehicle motion.
+
+    Returns
+    -------
+    float or None
+        The bound, rad/s (the least one for these motions); None for a motion type
+        not defined in this module.
+    """
+    kind = type(motion)
+    if kind is Motion:
+        return 0.0
+    if kind is YawSwing:
+        return abs(motion.amplitude)
+    if kind is Turn:
+        return abs(motion.rate)
+    if kind is HeadingHistory:
+        # Linear between samples and held outside them (heading_at interpolates).
+        return float(np.max(np.abs(np.diff(motion.headings) / np.diff(motion.times))))
+    return None
+
+
+def heading_accel_bound(motion: Motion) -> float | None:
+    """Bound on ``|H''|`` at every time, for motions whose heading rate is continuous.
+
+    Parameters
+    ----------
+    motion : Motion
+        Vehicle motion.
+
+    Returns
+    -------
+    float or None
+        The bound, rad/s^2; None for a heading history (its rate jumps at the
+        samples) or a motion type not defined in this module.
+    """
+    kind = type(motion)
+    if kind in (Motion, Turn):
+        return 0.0
+    if kind is YawSwing:
+        return abs(motion.amplitude) * 2.0 * math.pi / motion.period
+    return None
+
+
+def heading_rate_breaks(motion: Motion, level: float, t_end: float) -> np.ndarray | None:
+    """Times that split ``[0, t_end]`` into pieces on which ``heading_rate - level`` keeps one sign.
+
+    On each open interval between consecutive returned times (and before the first,
+    after the last) ``motion.heading_rate(t) - level`` is continuous and either
+    never zero or identically zero. The times are exact to round-off (a few ulp);
+    callers that sample the rate must allow a margin of a sample or so.
+
+    Parameters
+    ----------
+    motion : Motion
+        Vehicle motion.
+    level : float
+        Heading-rate level, rad/s.
+    t_end : float
+        End of the span of interest, s.
+
+    Returns
+    -------
+    ndarray or None
+        Sorted times in ``[0, t_end]``, s (possibly empty); None for a motion type not
+        defined in this module.
+    """
+    kind = type(motion)
+    if kind in (Motion, Turn):
+        return np.zeros(0)  # constant rate
+    if kind is HeadingHistory:
+        # heading_rate is constant between the samples, with a jump at each.
+        t = motion.times
+        return t[(t > 0.0) & (t <= t_end)]
+    if kind is YawSwing:
+        amp = motion.amplitude
+        if amp == 0.0 or abs(level) > abs(amp):
+            return np.zeros(0)
+        # A cos(w t) = level at w t = +-alpha + 2 pi n (a double root when |level| = |A|).
+        w = 2.0 * math.pi / motion.period
+        alpha = math.acos(max(-1.0, min(1.0, level / amp)))
+        n = np.arange(-1, math.floor(w * t_end / (2.0 * math.pi)) + 2)
+        t = np.sort(np.concatenate([2.0 * math.pi * n + alpha, 2.0 * math.pi * n - alpha]) / w)
+        t = t[(t >= 0.0) & (t <= t_end)]
+        return t[np.concatenate([[True], np.diff(t) > 0])] if len(t) else t  # double roots once
+    return None
