@@ -35,7 +35,11 @@ from inserr.model.error_sources import (
     source_set,
 )
 from inserr.model.exact_propagation import Output, propagate_covariance, propagate_outputs
-from inserr.model.fast_propagation import constant_error_response, white_noise_covariance
+from inserr.model.fast_propagation import (
+    constant_error_response,
+    gauss_markov_covariance,
+    white_noise_covariance,
+)
 from inserr.model.psi_model import DR, ErrorModel, Layout, attitude_error
 from inserr.model.timeline import Timeline
 
@@ -179,7 +183,6 @@ def analyze_drift(
         over smooth windows, white noise in closed form). ``"exact"``: the step-by-step
         engine :mod:`inserr.model.exact_propagation` on a timeline (a schedule is cut
         into ``substep`` sub-steps of constant rate first); kept as the reference.
-        Gauss-Markov bias instability always uses the step-by-step covariance.
     substep : float, s
         Sub-step of continuous motion when a timeline must be built from a schedule.
 
@@ -239,6 +242,17 @@ def analyze_drift(
         if engine == "fast" and not nmodel.layout.bias_instability:
             # White noise is isotropic: its covariance does not depend on the attitude.
             noise_cov[name] = white_noise_covariance(nmodel, arw, vrw, t_cov)
+            continue
+        if engine == "fast":
+            # A Gauss-Markov bias is seen through the attitude history.
+            hist = TimelineHistory(history) if isinstance(history, Timeline) else history
+            sensor, sigma, tau = (
+                ("gyro", gbi, imu.gyro_correlation_time)
+                if gbi > 0
+                else ("accel", abi, imu.accel_correlation_time)
+            )
+            nav_model = ErrorModel(site, Layout(bias=False), vertical=vertical)
+            noise_cov[name] = gauss_markov_covariance(nav_model, hist, sigma, tau, sensor, t_cov)
             continue
         ndisc = discretizer_for(nmodel, nmodel.noise_intensity(arw, vrw, gbi, abi))
         p0 = np.zeros((nmodel.layout.n,) * 2)

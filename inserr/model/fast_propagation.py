@@ -53,7 +53,7 @@ from threadpoolctl import threadpool_limits
 from inserr.core.rotations import skew
 from inserr.model.attitude_history import AttitudeHistory, Pieces
 from inserr.model.modal import NavModes
-from inserr.model.psi_model import ErrorModel
+from inserr.model.psi_model import DV, PSI, ErrorModel
 from inserr.model.quadrature import (
     MAX_PHASE,
     chebyshev_points,
@@ -1122,3 +1122,125 @@ def _xi(modes: NavModes, t: np.ndarray) -> np.ndarray:
             _XI_CACHE.pop(next(iter(_XI_CACHE)))
         _XI_CACHE[key] = xi
     return xi
+
+
+# ---------------------------------------------------------------------------------------
+# Gauss-Markov bias instability
+# ---------------------------------------------------------------------------------------
+def gauss_markov_covariance(
+    model: ErrorModel,
+    history: AttitudeHistory,
+    sigma: float,
+    tau: float,
+    sensor: str,
+    t: np.ndarray,
+) -> np.ndarray:
+    """Navigation-error covariance from a first-order Gauss-Markov bias on every IMU axis.
+
+    The bias ``b^s`` (IMU frame, each axis stationary with variance ``sigma^2`` and
+    correlation time ``tau``) enters the navigation errors through ``C_s^n(t) b^s``, so,
+    unlike white noise, its covariance depends on the attitude history. With
+    ``Q(t) = E[x(t) b^s(t)^T]`` (9 x 3) and ``x(0) = 0``::
+
+        Q' = (F - I / tau) Q + sigma^2 B C(t),     P' = F P + P F^T + B C Q^T + Q C^T B^T,
+
+    (``B`` the gyro rows ``-I`` of psi, or the accelerometer rows ``+I`` of dv). In the
+    eigenbasis (every mode, conjugates included) ``W = V^-1 Q`` is a constant-error
+    response with the modes shifted by ``-1/tau``, and ``P~ = V^-1 P V^-H`` is the integral
+    of ``e^{(lambda_i + conj(lambda_j)) (T - s)} [K W^H + W K^H]_ij`` with ``K = V^-1 B C``.
+    Both are evaluated window by window on Chebyshev points (``W`` at the points by the
+    spectral integration matrix), and scanned from window to window.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        Site and vertical mode.
+    history : AttitudeHistory
+        ``C_s^n(t)`` over the run.
+    sigma : float
+        Steady-state 1 sigma of the bias, rad/s (gyro) or m/s^2 (accelerometer).
+    tau : float
+        Correlation time, s.
+    sensor : {"gyro", "accel"}
+    t : (M,) s
+        Output times: 0, then increasing to the end of the history (they cut the windows).
+
+    Returns
+    -------
+    ndarray, shape (M, 9, 9)
+        Covariance of psi (rad), dv (m/s), dr (m), ENU, symmetrised.
+    """
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _gauss_markov(model, history, sigma, tau, sensor, np.asarray(t, dtype=float))
+
+
+def _gauss_markov(model, history, sigma, tau, sensor, t):
+    modes = NavModes(model)
+    lam, out, inv = modes.lam_all, modes.out_all, modes.inv_all
+    k_in = -inv[:, PSI] if sensor == "gyro" else inv[:, DV]  # (A, 3): n-frame error -> modes
+    mu = lam - 1.0 / tau
+    fastest = max(float(np.max(np.abs(mu))), 2.0 * float(np.max(np.abs(lam))))
+    pieces = history.pieces()
+    # Every window sampled (the state W varies inside still windows too).
+    plain = Pieces(pieces.breaks, pieces.bandwidth, np.zeros_like(pieces.still))
+    win = make_windows(plain, t, fastest)
+    win = Windows(win.a, win.b, win.piece, np.maximum(win.n, 8), win.kind, win.phase, win.coarse)
+    nw, na = len(win.a), len(lam)
+    s2 = sigma * sigma
+
+    def node_inputs(sel):
+        nd = _nodes(win, sel)
+        c, _ = history.evaluate(nd.t, win.piece[sel][nd.window])
+        return nd, np.einsum("ak,nkj->naj", k_in, c)  # K = V^-1 B C at the nodes (N, A, 3)
+
+    # Pass 1: the W increments of every window, then W at every window start.
+    d_w = np.empty((nw, na, 3), dtype=complex)
+    for sel in _chunks(win, CHUNK_NODES):
+        nd, kq = node_inputs(sel)
+        wt = nd.weight[:, None] * np.exp(mu[None, :] * (win.b[sel][nd.window] - nd.t)[:, None])
+        d_w[sel] = np.add.reduceat(s2 * wt[:, :, None] * kq, nd.first, axis=0)
+    w_end = scan(mu, 0.0, np.zeros((na, 3), dtype=complex), win.b, d_w)
+    w_start = np.concatenate([np.zeros((1, na, 3), dtype=complex), w_end[:-1]])
+
+    # Pass 2: W at the nodes, the P~ increments of every window.
+    d_p = np.empty((nw, na, na), dtype=complex)
+    for sel in _chunks(win, CHUNK_NODES):
+        nd, kq = node_inputs(sel)
+        a_n = win.a[sel][nd.window]
+        shift = nd.t - a_n
+        g = s2 * np.exp(-mu[None, :] * shift[:, None])[:, :, None] * kq  # (N, A, 3)
+        wq = np.empty_like(g)
+        for m in np.unique(win.n[sel]):
+            ws = np.flatnonzero(win.n[sel] == m)
+            idx = nd.first[ws][:, None] + np.arange(m)[None, :]  # (Wm, m)
+            x = chebyshev_points(int(m))
+            jmat = integration_matrix(x, int(m))  # node values -> integrals to the nodes
+            half = 0.5 * (win.b[sel][ws] - win.a[sel][ws])
+            ints = np.einsum("qp,wpaj->wqaj", jmat, g[idx]) * half[:, None, None, None]
+            wq[idx] = w_start[sel][ws][:, None] + ints
+        wq *= np.exp(mu[None, :] * shift[:, None])[:, :, None]
+        # P~ increment: sum_q c_q D_q (K W^H + W K^H) D_q^H, D_q = diag(e^{lambda (b - s_q)})
+        d = np.exp(lam[None, :] * (win.b[sel][nd.window] - nd.t)[:, None])[:, :, None]
+        kd, wd = d * kq * nd.weight[:, None, None], d * wq
+        term = kd @ np.conj(np.swapaxes(wd, 1, 2))
+        d_p[sel] = np.add.reduceat(term + np.conj(np.swapaxes(term, 1, 2)), nd.first, axis=0)
+    nu = lam[:, None] + np.conj(lam)[None, :]
+    p_end = scan(nu.ravel(), 0.0, np.zeros(na * na, dtype=complex), win.b, d_p.reshape(nw, -1))
+    p_end = p_end.reshape(nw, na, na)
+    res = np.zeros((len(t), 9, 9))
+    at = np.searchsorted(win.b, t - MERGE, side="left")
+    inside = t > MERGE
+    p_t = p_end[at[inside]]
+    res[inside] = (out[None] @ p_t @ np.conj(out.T)[None]).real
+    return 0.5 * (res + np.swapaxes(res, 1, 2))
+
+
+def _chunks(win: Windows, nodes: int):
+    """Index arrays of consecutive windows holding at most ``nodes`` points each."""
+    csum = np.cumsum(win.n)
+    lo = 0
+    while lo < len(win.n):
+        base = csum[lo - 1] if lo else 0
+        hi = max(int(np.searchsorted(csum, base + nodes, side="right")), lo + 1)
+        yield np.arange(lo, hi)
+        lo = hi
