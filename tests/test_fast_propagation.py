@@ -431,3 +431,41 @@ def test_gauss_markov_stationary_limit_equals_white_noise():
     white = fp.white_noise_covariance(ErrorModel(SITE, Layout(bias=False)), arw, 0.0, t)
     # Relative difference O(tau / T) for the variance growth: 2 s against hours.
     assert np.allclose(got[-1], white[-1], rtol=2e-3, atol=1e-3 * np.abs(white[-1]).max())
+
+
+@pytest.mark.parametrize(
+    ("motion", "scheme"),
+    [(Motion(heading=0.3, pitch=0.02, roll=-0.03), "sixteen-position"),
+     (Motion(), "continuous"),
+     (SWING, "two-position"),
+     (SWING, "none")],
+)  # fmt: skip
+def test_periodic_lifting_equals_the_whole_run(monkeypatch, motion, scheme):
+    # A periodic history (open-loop table on a static or periodic vehicle) is computed
+    # for one period and copied: identical to computing every window of the run.
+    dur = 6 * 3600.0
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 120.0).plan(motion, dur), motion, dur)
+    assert hist.period() is not None
+    lifted = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    monkeypatch.setattr(fp, "_lifting", lambda *a: None)
+    whole = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    assert _relative(lifted.nav, whole.nav) < 1e-10
+    n = len(whole.t_cov)
+    assert (
+        _relative(lifted.source_horizontal.reshape(n, -1), whole.source_horizontal.reshape(n, -1))
+        < 1e-10
+    )
+
+
+def test_history_period_is_the_common_period_of_table_and_vehicle():
+    # Two-position, 300 s stops at 6 deg/s: cycle 4 (300 + 30) = 1320 s; a 120 s swing
+    # divides it (11 swings); a 90 s swing does not: 1320 and 90 meet at 3960 s.
+    table = build_scheme("two-position", 6 * DEG, 300.0).plan(SWING, 72 * 3600.0)
+    assert ScheduleHistory(table, SWING, 72 * 3600.0).period() == (0.0, 1320.0)
+    swing90 = YawSwing(amplitude=6 * DEG, period=90.0)
+    t90 = build_scheme("two-position", 6 * DEG, 300.0).plan(swing90, 72 * 3600.0)
+    t0, p = ScheduleHistory(t90, swing90, 72 * 3600.0).period()
+    assert t0 == 0.0 and math.isclose(p, 3960.0, rel_tol=1e-12)
+    # A closed-loop rule has no period.
+    flex = build_scheme("flexible-two-position", 6 * DEG, 300.0).plan(SWING, 7200.0)
+    assert ScheduleHistory(flex, SWING, 7200.0).period() is None

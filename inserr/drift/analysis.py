@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -96,12 +97,12 @@ class DriftResult:
         )
         return np.sqrt(np.maximum(tot, 0.0))
 
-    @property
+    @cached_property
     def rms_horizontal(self) -> np.ndarray:
         """RMS horizontal error of the constant errors taken as random constants, m."""
         return rms_norm(self.source_horizontal)
 
-    @property
+    @cached_property
     def worst_horizontal(self) -> np.ndarray:
         """Horizontal error of the worst sign combination at each coarse time, m."""
         return worst_case_norm(self.source_horizontal)[0]
