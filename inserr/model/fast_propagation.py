@@ -896,13 +896,14 @@ class _Run:
         y_phase = np.einsum("qr,cpqf->cprf", wend, fv)  # (C, m, R, 63)
         self.cached_template = (n, s, fv)
 
-        # Tables: class 0 windows see their piece's table; the others the identity.
-        tables = np.where(
-            (cls == 0)[:, None, None], self.pieces.table[win.piece[idx]], np.eye(3)[None]
-        )
-        keys = np.round(tables.reshape(len(idx), 9), 12)
-        uniq, inv = np.unique(keys, axis=0, return_inverse=True)
-        inv = inv.reshape(-1)
+        # Tables: class 0 windows see their piece's table; the others the identity. Equal
+        # tables are found among the pieces (hundreds), not the windows (thousands).
+        pieces, piece_of = np.unique(win.piece[idx], return_inverse=True)
+        pcls = self.pieces.phase_class[pieces]
+        tables = np.where((pcls == 0)[:, None, None], self.pieces.table[pieces], np.eye(3)[None])
+        keys = np.round(tables.reshape(len(pieces), 9), 12)
+        uniq, inv_p = np.unique(keys, axis=0, return_inverse=True)
+        inv = inv_p.reshape(-1)[piece_of.reshape(-1)]
         mats = uniq.reshape(-1, 3, 3)
         nt = len(mats)
         # Signed input as a linear form in the template features, per table: A_M.
@@ -973,8 +974,10 @@ class _Run:
             b_w = win.b[sel][nd.window]
             wt = nd.weight[:, None] * np.exp(lam[None, :] * (b_w - nd.t)[:, None])
             self.incr[sel] = np.add.reduceat(wt * u, nd.first, axis=0)
-            cj = win.coarse[sel][nd.window]
-            jj, sums = _accumulate(cj, wt * self._to_coarse(b_w, cj), feats)
+            # Feature integrals per window (one product per window), then per coarse interval.
+            y = _window_sums(nd, win.n[sel], wt, feats)  # (Wc, R, 63) to each window's end
+            to_c = self._to_coarse(win.b[sel], win.coarse[sel])  # (Wc, R)
+            jj, sums = _group_sum(win.coarse[sel], y * to_c[:, :, None])
             self._add_features(jj, sums)
             self.direct_t[base : base + len(nd.t)] = nd.t
             self.direct_u[base : base + len(nd.t)] = u
@@ -1180,23 +1183,20 @@ def _group_sum(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.nda
     return k[start], np.add.reduceat(v, start, axis=0)
 
 
-def _accumulate(cj: np.ndarray, wt: np.ndarray, feats: np.ndarray):
-    """Per coarse interval j: ``sum over its nodes of wt[node, r] * feats[node, f]``.
+def _window_sums(nd: _Nodes, n: np.ndarray, wt: np.ndarray, feats: np.ndarray) -> np.ndarray:
+    """Per window: ``sum over its nodes of wt[node, r] * feats[node, f]``, (W, R, 63).
 
-    Returns the distinct intervals and their sums (K, R, 63).
+    Windows of equal point count are one batched product each (complex weights as two
+    real products).
     """
-    # Nodes are in time order, so each coarse interval is one contiguous run.
-    start = np.flatnonzero(np.concatenate([[True], cj[1:] != cj[:-1]]))
-    count = np.diff(np.concatenate([start, [len(cj)]]))
-    width = int(count.max())
-    pos = np.arange(len(cj)) - np.repeat(start, count)
-    run = np.repeat(np.arange(len(start)), count)
-    wpad = np.zeros((len(start), width, wt.shape[1]), dtype=complex)
-    fpad = np.zeros((len(start), width, feats.shape[1]))
-    wpad[run, pos] = wt
-    fpad[run, pos] = feats
-    wt_t = np.swapaxes(wpad, 1, 2)
-    return cj[start], np.matmul(wt_t.real, fpad) + 1j * np.matmul(wt_t.imag, fpad)
+    out = np.empty((len(n), wt.shape[1], feats.shape[1]), dtype=complex)
+    for m in np.unique(n):
+        ws = np.flatnonzero(n == m)
+        idx = nd.first[ws][:, None] + np.arange(m)[None, :]  # (Wm, m)
+        w_t = np.swapaxes(wt[idx], 1, 2)  # (Wm, R, m)
+        f = feats[idx]  # (Wm, m, 63)
+        out[ws] = np.matmul(w_t.real, f) + 1j * np.matmul(w_t.imag, f)
+    return out
 
 
 # ---------------------------------------------------------------------------------------
