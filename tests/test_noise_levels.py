@@ -27,7 +27,7 @@ from scipy.integrate import quad
 
 from inserr.core.earth import Site
 from inserr.core.imu import ImuErrors, InitialErrors
-from inserr.core.units import DEG, DEG_PER_HOUR, DEG_PER_SQRT_HOUR, MICRO_G
+from inserr.core.units import DEG, DEG_PER_HOUR, DEG_PER_SQRT_HOUR, MICRO_G, NMI
 from inserr.drift.analysis import analyze_drift
 from inserr.model.discretization import Discretizer
 from inserr.model.exact_propagation import propagate_covariance
@@ -143,6 +143,62 @@ def test_vrw_drives_each_equatorial_schuler_channel_as_the_closed_form():
     assert np.allclose(p[:, 0:3, 0:3], 0.0, rtol=0, atol=1e-30)
 
 
+def test_noise_drms_and_headline_add_the_east_and_north_variances():
+    # DRMS = sqrt(Var dr_E + Var dr_N), the VRW closed form of each channel above; the
+    # headline 1 sigma and the RMS total (no constant errors here) are its final value
+    # and its maximum, in nautical miles.
+    vrw = 20 * MICRO_G
+    res = analyze_drift(
+        Site(0.0),
+        ImuErrors(vrw=vrw),
+        InitialErrors(),
+        Timeline.static(np.eye(3), 0.5 * DAY),
+        dt_cov=600.0,
+    )
+    t = res.t_cov
+    var = 0.0
+    for radius in (R_N_EQUATOR, R_M_EQUATOR):
+        ws = math.sqrt(GAMMA_EQUATOR / radius)
+        var = var + vrw**2 / ws**2 * (t / 2 - np.sin(2 * ws * t) / (4 * ws))
+    drms = np.sqrt(var)
+    # Closed forms exact up to roundoff (see the VRW test): 1e-8.
+    assert res.noise_horizontal_sigma[1:] == pytest.approx(drms[1:], rel=1e-8)
+    m = res.metrics
+    assert m["final_horizontal_1sigma_nmi"] == pytest.approx(drms[-1] / NMI, rel=1e-8)
+    assert m["rms_total_horizontal_error_nmi"] == pytest.approx(drms.max() / NMI, rel=1e-8)
+    assert m["error_budget"]["vrw"] == pytest.approx(drms[-1] / NMI, rel=1e-8)
+
+
+def test_alignment_simulated_measurement_noise_has_the_zupt_sigma():
+    """Without process noise the alignment filter is a batch least-squares fit, and the
+    error of its velocity estimate right after a zero-velocity update comes from the
+    simulated measurement noise alone; the filter's sigma is built from the same
+    ``zupt_sigma``. Over 12 seeded runs the normalised squared velocity errors must be
+    chi-square with 24 degrees of freedom (two-sided 99.8 % band)."""
+    from scipy.stats import chi2
+
+    from inserr.alignment.filter import STATES, Prior, Settings, run_alignment
+
+    site = Site.from_degrees(34.0)
+    imu = ImuErrors(gyro_bias=np.full(3, 0.003 * DEG_PER_HOUR), accel_bias=np.full(3, 30 * MICRO_G))
+    prior = Prior(gyro_bias=imu.gyro_bias, accel_bias=imu.accel_bias)
+    tl = Timeline.static(np.eye(3), 60.0)
+    idx = [STATES.index("dv_e"), STATES.index("dv_n")]
+    rng = np.random.default_rng(5)
+    total = 0.0
+    n_runs = 12
+    for k in range(n_runs):
+        truth0 = prior.sigma() * rng.standard_normal(len(STATES))
+        res = run_alignment(site, tl, imu, prior, Settings(seed=200 + k), truth0=truth0)
+        e = (res.estimate[-1] - res.truth[-1])[idx]
+        p = res.p_final[np.ix_(idx, idx)]
+        total += float(e @ np.linalg.solve(p, e))
+    dof = 2 * n_runs
+    # A measurement noise of zupt_sigma^2 instead of zupt_sigma (1e-6 m/s, not 1e-3)
+    # leaves the velocity errors ~1000 x below their sigma: total ~ 0.
+    assert chi2.ppf(0.001, dof) < total < chi2.ppf(0.999, dof)
+
+
 def test_gyro_bias_instability_gives_the_stationary_gm_integral_in_the_north_tilt():
     # psi_N = -int b_N exactly at the equator; b starts stationary (variance sigma^2), so
     # Var psi_N = 2 sigma^2 tau^2 (t/tau - 1 + e^(-t/tau)). Started at zero instead, or
@@ -231,20 +287,21 @@ def test_north_finder_gauss_markov_process_is_stationary_from_the_first_sample()
 def test_north_finder_random_walk_stand_in_has_the_gm_increment_variance():
     # The filter lets eps' and nabla' random-walk with the GM's short-time increment
     # variance: Var(b(t + T) - b(t)) = 2 sigma^2 (1 - e^(-T/tau)) = 2 sigma^2 T / tau
-    # (1 + O(T / 2 tau)). With T = 1 s and tau = 300 s the O() term is 0.17 %.
+    # (1 + O(T / 2 tau)). With T = 0.5 s and tau >= 300 s the O() term is < 0.1 %.
     grade = SensorGrade(
         gyro_bias_instability=4e-8,
         gyro_correlation_time=300.0,
         accel_bias_instability=5e-5,
         accel_correlation_time=400.0,
     )
-    ins = Instrument(filter_period=1.0)
+    ins = Instrument(filter_period=0.5)
     kf = make_filter(ins, grade)
     period = ins.filter_period
     for idx, (s, tau) in ((4, (4e-8, 300.0)), (5, (5e-5, 400.0))):
         want = 2 * s**2 * (1 - math.exp(-period / tau))
         assert kf.Q[idx, idx] == pytest.approx(want, rel=5e-3)
-    # R: the period mean of white noise of PSD ARW^2 has variance ARW^2 / T.
+    # R: the mean over a period T of white noise of PSD ARW^2 has variance ARW^2 / T
+    # (T = 0.5 s, so that R = PSD x T would be told apart).
     assert kf.R[0, 0] == pytest.approx(grade.gyro_arw**2 / period, rel=1e-12)
     assert kf.R[1, 1] == pytest.approx(grade.accel_vrw**2 / period, rel=1e-12)
 
