@@ -34,12 +34,16 @@ def _skew(w: np.ndarray) -> np.ndarray:
 
 
 def _max_interval_mismatch(tl) -> float:
-    worst = 0.0
-    for k, w in enumerate(tl.omega_n):
-        dt = tl.times[k + 1] - tl.times[k]
-        carried = sl.expm(dt * _skew(w)) @ tl.c_sn[k]
-        worst = max(worst, float(np.abs(carried - tl.c_sn[k + 1]).max()))
-    return worst
+    dt = np.diff(tl.times)
+    # expm(dt [w x]) by scipy for a handful of intervals, Rodrigues (written below) for all.
+    for k in range(min(3, len(dt))):
+        assert np.allclose(
+            sl.expm(dt[k] * _skew(tl.omega_n[k])), _rodrigues(tl.omega_n[k], dt[k : k + 1])[0]
+        )
+    carried = np.array(
+        [_rodrigues(w, np.array([h]))[0] for w, h in zip(tl.omega_n, dt, strict=True)]
+    )
+    return float(np.abs(carried @ tl.c_sn[:-1] - tl.c_sn[1:]).max())
 
 
 TILTED = Motion(heading=0.4, pitch=3 * DEG, roll=-2 * DEG)
@@ -125,3 +129,142 @@ def test_timeline_cycle_integral_equals_the_closed_form(scheme, motion):
     want = cycle_integrals(s, motion).full
     # Both exact; quantized rates (1e-13 rad/s over ~1000 s) and roundoff: ~1e-9 s.
     assert np.allclose(got, want, rtol=0, atol=1e-7)
+
+
+def _rot(axis: int, angle: float) -> np.ndarray:
+    """Right-hand turn about a coordinate axis (Rodrigues, no inserr rotation code)."""
+    e = np.zeros(3)
+    e[axis] = 1.0
+    return _rodrigues(e, np.array([angle]))[0]
+
+
+def test_isolation_angle_points_the_imu_y_axis_at_the_target_heading():
+    # Random tilted vehicle attitudes, inner angles, an off-axis mounting and targets: the
+    # returned outer angle a must put the IMU y axis, C_b^n rot_z(a) rot_x(b) C_s^t e_y,
+    # at the target heading (clockwise from north) with a positive horizontal projection.
+    from inserr.schemes.turntable import imu_heading_offset, isolation_angle
+
+    rng = np.random.default_rng(7)
+    mounting = _rot(0, 0.02) @ _rot(1, -0.03) @ _rot(2, 0.05)
+    for mount in (None, mounting):
+        m = np.eye(3) if mount is None else mount
+        c_bn = np.array(
+            [
+                _rot(2, rng.uniform(-3, 3))
+                @ _rot(0, rng.normal(0, 0.05))
+                @ _rot(1, rng.normal(0, 0.05))
+                for _ in range(6)
+            ]
+        )
+        b = rng.choice([0.0, math.pi], size=6) + rng.normal(0, 0.01, size=6)
+        target = rng.uniform(-math.pi, math.pi, size=6)
+        a = isolation_angle(c_bn, b, mount, target)
+        for k in range(6):
+            y_n = c_bn[k] @ _rot(2, a[k]) @ _rot(0, b[k]) @ m @ np.array([0.0, 1.0, 0.0])
+            heading = math.atan2(y_n[0], y_n[1])
+            # A closed-form root: roundoff only.
+            assert math.remainder(heading - target[k], 2 * math.pi) == pytest.approx(0.0, abs=1e-9)
+        # imu_heading_offset is the same geometry for a vehicle at heading 0.
+        tilt = _rot(0, 0.04) @ _rot(1, -0.02)
+        off = imu_heading_offset(tilt, a, b, mount)
+        for k in range(6):
+            y_n = tilt @ _rot(2, a[k]) @ _rot(0, b[k]) @ m @ np.array([0.0, 1.0, 0.0])
+            assert off[k] == pytest.approx(math.atan2(y_n[0], y_n[1]), abs=1e-12)
+
+
+def _rodrigues(w: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """expm(s [w x]) for every s, written out (Rodrigues), shape (len(s), 3, 3)."""
+    rate = np.linalg.norm(w)
+    if rate == 0.0:
+        return np.broadcast_to(np.eye(3), (len(s), 3, 3))
+    k = _skew(w / rate)
+    th = (rate * s)[:, None, None]
+    return np.eye(3) + np.sin(th) * k + (1 - np.cos(th)) * (k @ k)
+
+
+def _cycle_moments(tl, t0: float, t1: float, w_table_n):
+    """Numerical cycle integrals from the timeline, Gauss-Legendre per interval.
+
+    Returns (U(t1) - U(t0), mean over [t0, t1] of U(t) = int_0^t C dt, and the same two
+    for the rate terms C e_r (C^T w)_c of every unit error e_r e_c^T, w the table's rate).
+    """
+    x, wts = np.polynomial.legendre.leggauss(30)
+    u = np.zeros((3, 3))
+    u_rate = np.zeros((3, 3, 3))  # [:, r, c]: int C e_r (C^T w)_c dt
+    s_u = np.zeros((3, 3))
+    s_rate = np.zeros((3, 3, 3))
+    u_at_t0 = None
+    u_rate_at_t0 = None
+    for k, w in enumerate(tl.omega_n):
+        a, b = tl.times[k], min(tl.times[k + 1], t1)
+        if b <= a:
+            continue
+        h = b - a
+        s = 0.5 * h * (x + 1.0)
+        ws = 0.5 * h * wts
+        c = _rodrigues(w, s) @ tl.c_sn[k]
+        w_n = w_table_n(k)
+        ws_imu = np.einsum("jab,a->jb", c, w_n)  # C^T w, (J, 3)
+        rate = np.einsum("jar,jc->jarc", c, ws_imu)  # (J, 3, 3, 3)
+        if a >= t0:
+            if u_at_t0 is None:
+                u_at_t0, u_rate_at_t0 = u.copy(), u_rate.copy()
+            # int over the interval of U(t) = U(a) h + int_0^h (h - s) C(a + s) ds
+            s_u += u * h + np.einsum("j,jab->ab", ws * (h - s), c)
+            s_rate += u_rate * h + np.einsum("j,jarc->arc", ws * (h - s), rate)
+        u = u + np.einsum("j,jab->ab", ws, c)
+        u_rate = u_rate + np.einsum("j,jarc->arc", ws, rate)
+    cycle = t1 - t0
+    return u - u_at_t0, s_u / cycle, u_rate - u_rate_at_t0, s_rate / cycle
+
+
+@pytest.mark.parametrize("scheme", ["two-position", "four-position-modified", "quarter-turns"])
+def test_cycle_integrals_running_means_and_rate_terms_match_the_timeline(scheme):
+    """Every closed-form cycle quantity against quadrature of the timeline: the integral of
+    C_s^n, the cycle mean of its running integral from t = 0 (first stop included), and
+    the scale-factor and misalignment x table-rate integrals and their means."""
+    from inserr.core.imu import MISALIGNMENT_INDEX, MISALIGNMENTS
+
+    motion = TILTED
+    s = _scheme(scheme, 30.0)
+    t0, t1 = s.first_dwell, s.first_dwell + s.cycle_time
+    tl = build_timeline(s.plan(motion, t1), motion, t1)
+
+    def w_table_n(k):  # the table's own rate resolved in n (Earth rate excluded)
+        return tl.omega_n[k]  # static base: the IMU's rate relative to n is the table's
+
+    u, mean_u, u_rate, mean_rate = _cycle_moments(tl, t0, t1, w_table_n)
+    ci = cycle_integrals(s, motion)
+    # 30-point Gauss-Legendre on intervals of at most half a turn: ~1e-13 relative; the
+    # quantities reach ~1e3 s (U) and ~1 rad (rate terms).
+    assert np.allclose(ci.full, u, rtol=0, atol=1e-8)
+    assert np.allclose(ci.mean_excursion, mean_u, rtol=0, atol=1e-8)
+    sf = np.stack([u_rate[:, i, i] for i in range(3)], axis=1)
+    mis = np.stack([u_rate[:, r, c] for r, c in (MISALIGNMENT_INDEX[n] for n in MISALIGNMENTS)], 1)
+    assert np.allclose(ci.scale_factor, sf, rtol=0, atol=1e-10)
+    assert np.allclose(ci.misalignment, mis, rtol=0, atol=1e-10)
+    sf_mean = np.stack([mean_rate[:, i, i] for i in range(3)], axis=1)
+    mis_mean = np.stack(
+        [mean_rate[:, r, c] for r, c in (MISALIGNMENT_INDEX[n] for n in MISALIGNMENTS)], 1
+    )
+    assert np.allclose(ci.mean_excursion_scale_factor, sf_mean, rtol=0, atol=1e-10)
+    assert np.allclose(ci.mean_excursion_misalignment, mis_mean, rtol=0, atol=1e-10)
+
+
+@pytest.mark.parametrize(
+    "scheme, options, starts",
+    [
+        # A start is a turn after a stop or a reversal (docs/schemes.md).
+        ("two-position", {}, 4),
+        ("four-position", {}, 4),
+        ("eight-position", {}, 8),
+        ("continuous", {}, 0),  # one endless turn: started once, before the cycle
+        ("continuous", {"reversal": 120.0}, 2),
+    ],
+)
+def test_motor_starts_per_cycle(scheme, options, starts):
+    s = build_scheme(scheme, 6 * DEG, 30.0, **options)
+    assert cycle_integrals(s).motor_starts == starts
+    assert cycle_integrals(s).motor_starts_per_hour == pytest.approx(
+        starts * 3600.0 / s.cycle_time, rel=1e-12
+    )

@@ -705,7 +705,18 @@ def _mutmut(copy: Path, *args: str, timeout: float | None = None) -> tuple[int, 
     return _run([sys.executable, "-c", code], copy, timeout)
 
 
-def full(jobs: int, workdir: Path | None, keep: bool) -> float:
+def _statuses(copy: Path) -> dict[str, str]:
+    """mutmut's verdict of every mutant in :data:`FULL_SCOPE` ("killed", "survived", ...)."""
+    code, out, _ = _mutmut(copy, "results", "--all", "true")
+    status: dict[str, str] = {}
+    for line in out.splitlines():
+        name, sep, verdict = line.strip().rpartition(": ")
+        if sep and name.startswith("inserr."):
+            status[name] = verdict.strip()
+    return {n: s for n, s in status.items() if any(fnmatch.fnmatch(n, p) for p in FULL_SCOPE)}
+
+
+def full(jobs: int, workdir: Path | None, keep: bool, survivors_only: bool = False) -> float:
     try:
         import mutmut  # noqa: F401
     except ImportError:
@@ -725,21 +736,20 @@ def full(jobs: int, workdir: Path | None, keep: bool) -> float:
                 elif src.exists():
                     shutil.copy2(src, dst)
         _check_no_pyins(copy)
+        names = list(FULL_SCOPE)
+        if survivors_only and (copy / "mutants").exists():
+            # Rerun only what the last run did not kill (new tests, same mutants).
+            names = [n for n, s in _statuses(copy).items() if s not in ("killed", "timeout")]
+            print(f"rerunning the {len(names)} mutants in scope not killed last time")
         print(f"full mode: mutmut in {copy} ({jobs} children); this takes a while")
-        code, out, secs = _mutmut(copy, "run", "--max-children", str(jobs), *FULL_SCOPE)
+        code, out, secs = 0, "", 0.0
+        if names:
+            code, out, secs = _mutmut(copy, "run", "--max-children", str(jobs), *names)
         (work / "mutmut-run.log").write_text(out)
         if code != 0:
             print(out[-3000:])
             sys.exit(f"mutation: mutmut run failed (exit {code})")
-        code, out, _ = _mutmut(copy, "results", "--all", "true")
-        status: dict[str, str] = {}
-        for line in out.splitlines():
-            name, sep, verdict = line.strip().rpartition(": ")
-            if sep and name.startswith("inserr."):
-                status[name] = verdict.strip()
-        in_scope = {
-            n: s for n, s in status.items() if any(fnmatch.fnmatch(n, p) for p in FULL_SCOPE)
-        }
+        in_scope = _statuses(copy)
         equivalents = load_equivalents()
 
         def is_equivalent(name: str) -> bool:
@@ -778,6 +788,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--list", action="store_true", help="quick: print the list and exit")
     ap.add_argument("--workdir", type=Path, help="full: reuse this mutmut work directory")
     ap.add_argument("--keep", action="store_true", help="full: keep the mutmut work directory")
+    ap.add_argument(
+        "--survivors-only",
+        action="store_true",
+        help="full, with --workdir of an earlier run: rerun only the mutants it did not kill",
+    )
     args = ap.parse_args(argv)
     if args.list:
         for m in QUICK:
@@ -787,7 +802,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.quick:
         quick(max(1, args.jobs), args.only)
     else:
-        full(max(1, args.jobs), args.workdir, args.keep)
+        full(max(1, args.jobs), args.workdir, args.keep, args.survivors_only)
     return 0
 
 
