@@ -354,3 +354,43 @@ def test_north_finder_filter_covariance_matches_its_scatter_under_gm_noise():
     # Pooled over A and B, 400 draws: standard error of the sigma ratio <= 5 %; 20 % is
     # four of them. Half the GM process noise in the filter makes the ratio ~1.33.
     assert ratio == pytest.approx(1.0, abs=0.2)
+
+
+def test_turning_imu_modulates_its_gyro_bias_instability():
+    """A level IMU turning about up at w near the pole: the n-resolved GM bias R(t) b(t)
+    drives psi, which itself turns at -Omega about (nearly) up. In psi's turning frame the
+    bias turns at w + Omega sin L, so the horizontal tilt variance is
+    4 sigma^2 Re[t / l - (1 - e^(-l t)) / l^2] with l = 1/tau - i (w + Omega sin L); the up
+    component is not modulated: 2 sigma^2 tau^2 (t/tau - 1 + e^(-t/tau)). The outputs are
+    not on the turn's node grid, so the propagation must follow the timeline's intervals."""
+    sigma, tau, w = 0.02 * DEG_PER_HOUR, 300.0, 2 * DEG
+    lat = 89.9 * DEG
+    duration = 1200.0
+    times = np.array([0.0, 100.0, duration])
+    c1 = sl.expm(100.0 * np.cross(np.eye(3), [0.0, 0.0, w]))
+    c2 = sl.expm(duration * np.cross(np.eye(3), [0.0, 0.0, w]))
+    tl = Timeline(times, np.stack([np.eye(3), c1, c2]), np.array([[0, 0, w], [0, 0, w]]))
+    imu = ImuErrors(gyro_bias_instability=sigma, gyro_correlation_time=tau)
+    res = analyze_drift(Site(lat), imu, InitialErrors(), tl, dt_cov=150.0)
+    p = res.noise_cov["gyro_bias_instability"]
+    t = res.t_cov
+    lam = 1.0 / tau - 1j * (w + 7.292115e-5 * math.sin(lat))
+    horizontal = 4 * sigma**2 * np.real(t / lam - (1 - np.exp(-lam * t)) / lam**2)
+    up = _gm_integral_variance(sigma, tau, t)
+    # What is left is the Earth rate's horizontal part, W cos L = 1.3e-7 rad/s, leaking the
+    # 100 x larger up variance into the tilts: ~100 (W cos L t)^2 / 3 < 1e-6. A static IMU
+    # would give ~(w tau)^2 = 110 times the horizontal value, a w off by W 0.4 % less.
+    assert p[1:, 0, 0] + p[1:, 1, 1] == pytest.approx(horizontal[1:], rel=1e-3)
+    assert p[1:, 2, 2] == pytest.approx(up[1:], rel=1e-3)
+
+
+def test_covariance_outputs_that_start_after_zero_are_the_same_numbers():
+    # propagate_covariance on [600, 1200] and on [0, 600, 1200]: the same P at 600 and 1200.
+    model = ErrorModel(Site.from_degrees(34.0), Layout(bias=False))
+    disc = Discretizer(model, model.noise_intensity(1e-6, 1e-5))
+    tl = Timeline.static(np.eye(3), 1200.0)
+    full = propagate_covariance(disc, tl, np.zeros((9, 9)), np.array([0.0, 600.0, 1200.0]))
+    late = propagate_covariance(disc, tl, np.zeros((9, 9)), np.array([600.0, 1200.0]))
+    # Same steps, same products: identical to roundoff.
+    assert np.allclose(late, full[1:], rtol=1e-12, atol=0)
+    assert late[0, 0, 0] > 0
