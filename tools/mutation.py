@@ -64,6 +64,7 @@ PHYSICS_TESTS = (
     "tests/test_noise_levels.py",
     "tests/test_scheme_timelines.py",
     "tests/test_scheme_tables.py",
+    "tests/test_discretization_paths.py",
     "tests/test_model.py",
     "tests/test_propagate.py",
     "tests/test_rotations.py",
