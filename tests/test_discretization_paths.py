@@ -74,3 +74,15 @@ def test_single_noise_equals_van_loan_written_here():
     # Two Van Loan exponentials of the same blocks: ~1e-12 of the largest entry.
     assert np.allclose(got, ref, rtol=0, atol=1e-10 * np.abs(ref).max())
     assert np.allclose(got, got.T, rtol=0, atol=0)
+
+
+def test_state_space_views_carry_the_layout_names_and_noise_channels():
+    model = ErrorModel(SITE, Layout(scale_misalignment=True, bias_instability=True))
+    sys = model.state_space(np.array([0.0, 0.0, 0.1]))
+    assert list(sys.state_labels) == list(model.layout.names)
+    assert list(sys.output_labels) == list(model.layout.names)
+    # Noise inputs: white gyro, white accelerometer, GM gyro drive, GM accel drive (x, y, z).
+    assert list(sys.input_labels) == [f"w_{k}{a}" for k in ("g", "a", "bg", "ba") for a in "xyz"]
+    c = sl.expm(np.cross(np.eye(3), [0.1, -0.2, 0.3]))
+    imu = model.state_space_imu(c)
+    assert list(imu.state_labels) == list(model.layout.names)

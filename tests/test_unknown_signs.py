@@ -109,3 +109,28 @@ def test_drift_result_rms_and_worst_are_those_of_its_per_source_responses():
     # The signed sum of the per-source responses is the deterministic run (superposition).
     fine_at_coarse = np.searchsorted(res.t, res.t_cov)
     assert np.allclose(v.sum(axis=1), res.nav[fine_at_coarse, 6:8], rtol=1e-9, atol=1e-9)
+
+
+def test_worst_case_norm_matches_brute_force_on_many_random_sets():
+    # 400 sets of 9 vectors, some nearly collinear (narrow vertex cones), all 2^9
+    # patterns at once: the exact vertex search must find every maximum.
+    rng = np.random.default_rng(4)
+    n = 9
+    base = rng.normal(size=(400, 1, 2))
+    v = rng.normal(size=(400, n, 2)) * rng.uniform(0.01, 3.0, size=(400, n, 1))
+    v[:200] = base[:200] * rng.uniform(-2, 2, size=(200, n, 1)) + 0.05 * v[:200]
+    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=n)))  # (512, n)
+    brute = np.linalg.norm(np.einsum("pn,snd->spd", signs, v), axis=-1).max(axis=1)
+    norm, best = worst_case_norm(v)
+    assert norm == pytest.approx(brute, rel=1e-12)
+    assert np.linalg.norm(np.einsum("sn,snd->sd", best, v), axis=-1) == pytest.approx(
+        brute, rel=1e-12
+    )
+
+
+def test_no_sources_give_zero_rms_and_worst_case_with_batch_shapes():
+    v = np.zeros((3, 4, 0, 2))
+    norm, signs = worst_case_norm(v)
+    assert norm.shape == (3, 4) and signs.shape == (3, 4, 0)
+    assert np.all(norm == 0.0)
+    assert rms_norm(v).shape == (3, 4) and np.all(rms_norm(v) == 0.0)
