@@ -15,7 +15,7 @@ import pytest
 
 from inserr.core.earth import Site
 from inserr.core.imu import ImuErrors, InitialErrors
-from inserr.core.units import ARCSEC, DEG_PER_HOUR, MICRO_G, NMI, PPM
+from inserr.core.units import ARCSEC, DEG_PER_HOUR, DEG_PER_SQRT_HOUR, MICRO_G, NMI, PPM
 from inserr.drift.analysis import analyze_drift
 from inserr.drift.unknown_signs import rms_norm, worst_case_norm
 from inserr.model.timeline import Timeline
@@ -134,3 +134,70 @@ def test_no_sources_give_zero_rms_and_worst_case_with_batch_shapes():
     assert norm.shape == (3, 4) and signs.shape == (3, 4, 0)
     assert np.all(norm == 0.0)
     assert rms_norm(v).shape == (3, 4) and np.all(rms_norm(v) == 0.0)
+
+
+def test_headline_figures_are_those_of_the_histories():
+    # Every headline number against the histories it summarises (units at the edge:
+    # nmi, deg, h), and the per-source heading errors add up to the deterministic one.
+    site = Site.from_degrees(34.0)
+    imu = ImuErrors(
+        gyro_bias=np.array([0.01, -0.02, 0.005]) * DEG_PER_HOUR,
+        accel_bias=np.array([40.0, -30.0, 0.0]) * MICRO_G,
+        arw=0.001 * DEG_PER_SQRT_HOUR,
+    )
+    init = InitialErrors(attitude=np.array([5.0, -5.0, 30.0]) * ARCSEC)
+    duration = 3 * 3600.0
+    res = analyze_drift(site, imu, init, Timeline.static(np.eye(3), duration), dt_cov=600.0)
+    m = res.metrics
+    h = np.hypot(res.nav[:, 6], res.nav[:, 7])
+    assert m["hours"] == pytest.approx(3.0, rel=1e-12)
+    assert m["max_horizontal_error_nmi"] == pytest.approx(h.max() / NMI, rel=1e-12)
+    assert m["final_horizontal_error_nmi"] == pytest.approx(h[-1] / NMI, rel=1e-12)
+    assert m["final_heading_error_deg"] == pytest.approx(
+        math.degrees(res.attitude[-1, 2]), rel=1e-12
+    )
+    noise = np.sqrt(res.noise_cov["arw"][:, 6, 6] + res.noise_cov["arw"][:, 7, 7])
+    assert m["final_horizontal_1sigma_nmi"] == pytest.approx(noise[-1] / NMI, rel=1e-12)
+    total = np.sqrt(np.sum(res.source_horizontal**2, axis=(1, 2)) + noise**2)
+    assert m["rms_total_horizontal_error_nmi"] == pytest.approx(total.max() / NMI, rel=1e-12)
+    budget = list(m["error_budget"].items())
+    assert [v for _, v in budget] == sorted((v for _, v in budget), reverse=True)
+    assert {k for k, _ in budget} == {s.name for s in res.sources} | {"arw"}
+    assert m["error_budget"]["arw"] == pytest.approx(noise[-1] / NMI, rel=1e-12)
+    # Heading per source (rad), scaled by the magnitudes: their sum is the signed run's.
+    at_coarse = np.searchsorted(res.t, res.t_cov)
+    assert res.source_heading.shape == (len(res.t_cov), len(res.sources))
+    assert np.allclose(
+        res.source_heading.sum(axis=1), res.attitude[at_coarse, 2], rtol=1e-9, atol=1e-15
+    )
+
+
+def test_no_constant_sources_give_empty_per_source_results():
+    res = analyze_drift(
+        Site.from_degrees(34.0),
+        ImuErrors(vrw=1e-5),
+        InitialErrors(),
+        Timeline.static(np.eye(3), 1800.0),
+        dt_cov=600.0,
+    )
+    assert res.sources == []
+    assert res.source_horizontal.shape == (4, 0, 2) and res.source_heading.shape == (4, 0)
+    assert np.all(res.rms_horizontal == 0.0) and np.all(res.worst_horizontal == 0.0)
+    assert np.all(res.nav == 0.0)
+    assert res.metrics["rms_horizontal_error_nmi"] == 0.0
+    assert list(res.metrics["error_budget"]) == ["vrw"]
+    assert res.metrics["final_horizontal_1sigma_nmi"] > 0.0
+
+
+def test_vertical_initial_errors_are_dropped_when_the_vertical_channel_is_clamped():
+    # Clamped (aided) vertical channel: vertical initial velocity and position errors are
+    # no sources and move nothing. Free: they are, and the vertical error diverges as
+    # cosh(sqrt(2 g / R) t) (a 6 h run grows a 1 m error by orders of magnitude).
+    site = Site.from_degrees(34.0)
+    init = InitialErrors(velocity=[0.0, 0.0, 0.01], position=[0.0, 0.0, 1.0])
+    tl = Timeline.static(np.eye(3), 6 * 3600.0)
+    clamped = analyze_drift(site, ImuErrors(), init, tl, dt_cov=600.0)
+    assert clamped.sources == [] and np.all(clamped.nav == 0.0)
+    free = analyze_drift(site, ImuErrors(), init, tl, dt_cov=600.0, vertical="free")
+    assert [s.name for s in free.sources] == ["initial_velocity_u", "initial_position_u"]
+    assert free.nav[-1, 8] > 100.0
