@@ -321,7 +321,7 @@ def test_bias_instability_bound_matches_a_gauss_markov_monte_carlo():
     white one (sqrt(1 + 8)); 200 seeded runs of 10 table turns with GM noise must scatter
     by that bound. The filter's random walk matches the GM spectrum at the table
     frequency (w tau = 6.3), so it reaches the asymptotic bound."""
-    ins = Instrument(sample_rate=5.0)
+    ins = Instrument(sample_rate=2.0, filter_period=2.0)
     grade = _gm_dominated_grade(ins, tau=60.0, ratio=8.0)
     pose = Pose.from_degrees(34.0, 30.0)
     n = 200
@@ -343,7 +343,7 @@ def test_bias_instability_bound_matches_a_gauss_markov_monte_carlo():
 def test_north_finder_filter_covariance_matches_its_scatter_under_gm_noise():
     # The filter's own covariance of A and B (its noise model: ARW, and the GM as a random
     # walk) against the scatter of its estimates over 200 seeded runs of 5 turns.
-    ins = Instrument(sample_rate=5.0)
+    ins = Instrument(sample_rate=2.0, filter_period=2.0)
     grade = _gm_dominated_grade(ins, tau=60.0, ratio=8.0)
     pose = Pose.from_degrees(34.0, 30.0)
     n = 200
