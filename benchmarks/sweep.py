@@ -1,133 +1,92 @@
-"""Benchmark: a 16-point design sweep with 1 and with 2 local workers.
+"""Benchmark: a 1000-point design sweep of P0's swinging base on 1 and on 2 local workers.
 
-Each point is a 72 h drift analysis of a full navigation-grade budget (biases,
-scale factors, misalignments, noise) on P0's swinging base, a few seconds of CPU,
-so that Dask's scheduling and the start-up of the worker processes (each imports
-numpy, scipy and inserr, and starts with a cold discretization cache: one to two
-seconds) do not dominate. The two runs must give identical
-``results.csv`` files (determinism); the last line printed is
-``sweep_speedup_2_workers: <ratio>``.
+Every point is a 72 h drift analysis of P0 experiment 1
+(``analyses/p0_swinging_base/scenario.toml``: P0's full budget, yaw swing, outputs
+at 10 s and 60 s) with one change per swept parameter::
+
+    scheme   two-position, four-position, four-position-modified,
+             flexible-two-position, nulling-two-position          (5)
+    stop     60, 120, 180, 240, 300 s                              (5)
+    rate     3, 6, 10, 20 deg/s                                    (4)
+    period   20, 30, 45, 60, 90, 120, 165, 240, 480, 1200 s        (10)
+
+The sweep runs once in this process (1 worker, Dask's synchronous scheduler) and
+once on 2 worker processes; the two ``results.csv`` must be identical (the sweep is
+deterministic whatever the engine). Printed: both wall times, the CPU time they used
+(how many cores the run really got on a shared machine), and last::
+
+    sweep_points_per_second: <points per second on 2 workers>
 
 Usage::
 
-    python benchmarks/sweep.py            # 1 worker (in-process) vs 2 worker processes
-    python benchmarks/sweep.py --threads  # also 2 threads in one process
+    python benchmarks/sweep.py              # the 1000 points (target: <= 120 s on 2 workers)
+    python benchmarks/sweep.py --points 40  # a subset (every k-th point), for a quick check
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import tempfile
 import time
 from pathlib import Path
 
-from inserr.scenario.schema import scenario_from_dict
-from inserr.sweep.grid import build_grid
-from inserr.sweep.runner import run_sweep
-
-BASE = {  # P0's navigation-grade budget and yaw swing, 72 h at P0's site latitude
-    "scenario": {"name": "bench", "duration": "72 h"},
-    "site": {"latitude": "34.246 deg"},
-    "motion": {
-        "type": "yaw-swing",
-        "amplitude": "6 deg/s",
-        "period": "120 s",
-        "pitch": "1 deg",
-        "roll": "-2 deg",
-    },
-    "imu": {
-        "gyro_bias": "0.003 deg/h",
-        "accel_bias": "30 ug",
-        "gyro_scale_factor": "10 ppm",
-        "accel_scale_factor": "10 ppm",
-        "gyro_misalignment": "10 arcsec",
-        "accel_misalignment": "10 arcsec",
-        "arw": "0.0005 deg/sqrt(h)",
-        "vrw": "5 ug/sqrt(Hz)",
-        "gyro_bias_instability": "0.001 deg/h",
-    },
-}
-#: 2 x 4 x 2 = 16 points; short stops, the expensive end of a stop-time study.
-PARAMS = ["scheme=two-position,four-position", "stop=20,30,45,60", "rate=6,10"]
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIO = ROOT / "analyses" / "p0_swinging_base" / "scenario.toml"
+PARAMS = [
+    "scheme=two-position,four-position,four-position-modified,"
+    "flexible-two-position,nulling-two-position",
+    "stop=60,120,180,240,300",
+    "rate=3,6,10,20",
+    "motion.period=20 s,30 s,45 s,60 s,90 s,120 s,165 s,240 s,480 s,1200 s",
+]
 
 
-def timed(grid, root: Path, label: str, **engine) -> tuple[float, str]:
-    """Wall time of one sweep, and its results.csv; prints the CPU time used too.
+def timed(grid, out: Path, label: str, **engine) -> tuple[float, str]:
+    """Wall time of one sweep and the text of its results.csv (CPU time printed too)."""
+    from inserr.sweep.runner import run_sweep
 
-    The CPU time (this process and its finished worker processes) over the wall
-    time shows how many cores the run really got: on a shared machine, other
-    jobs take their share and the speed-up drops with it.
-
-    Parameters
-    ----------
-    grid : Grid
-        The grid to run (every point must succeed).
-    root : Path
-        Directory for the run's output directory ``root/label``.
-    label : str
-        Name of the run, printed and used as the directory name.
-    **engine
-        ``scheduler`` and ``workers`` for :func:`inserr.sweep.runner.run_sweep`.
-
-    Returns
-    -------
-    wall : float
-        Wall time of the sweep (s).
-    results : str
-        The text of its ``results.csv``.
-    """
-    out = root / label
     cpu0, t0 = os.times(), time.perf_counter()
     res = run_sweep(grid, out, plots=False, **engine)
     wall = time.perf_counter() - t0
-    cpu1 = os.times()
-    cpu = sum(cpu1[:4]) - sum(cpu0[:4])
+    cpu = sum(os.times()[:4]) - sum(cpu0[:4])
     assert res.counts == {"ok": len(grid.points)}, res.counts
     print(
-        f"{label:>11}: {wall:6.2f} s wall, {cpu:6.2f} s CPU ({cpu / wall:.2f} cores) {res.engine}",
+        f"{label:>11}: {wall:7.2f} s wall, {cpu:7.2f} s CPU ({cpu / wall:.2f} cores), "
+        f"{len(grid.points) / wall:.2f} points/s",
         flush=True,
     )
     return wall, (out / "results.csv").read_text()
 
 
-def main() -> None:
-    """Time the sweep of :data:`PARAMS` with 1 and 2 workers and print the speed-up.
-
-    Raises
-    ------
-    AssertionError
-        A point did not succeed, or the results differ between worker counts.
-    """
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--threads", action="store_true", help="also time 2 threads")
-    args = parser.parse_args()
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--points", type=int, default=None, help="run every k-th point only")
+    args = ap.parse_args(argv)
     os.environ.setdefault("INSERR_NO_PROGRESS", "1")
-    grid = build_grid(scenario_from_dict(BASE), PARAMS)
+    from inserr.scenario.schema import load_scenario
+    from inserr.sweep.grid import build_grid
+
+    params = list(PARAMS)
+    grid = build_grid(load_scenario(SCENARIO), params)
+    if args.points:
+        keep = grid.points[:: max(1, len(grid.points) // args.points)][: args.points]
+        grid = dataclasses.replace(grid, points=tuple(keep))
     print(
-        f"{len(grid.points)} points of {BASE['scenario']['duration']}, {os.cpu_count()} CPUs, "
+        f"{len(grid.points)} points of 72 h, {os.cpu_count()} CPUs, "
         f"load average {os.getloadavg()[0]:.2f}"
     )
+    # Imports first (not timed): the first import reads everything from disk.
+    import inserr.drift.study  # noqa: F401
+
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
-        # Imports first (not timed): on a freshly installed environment the first
-        # import reads everything from disk, which would be charged to the 1-worker
-        # run alone. Nothing is computed, so both runs start with cold caches.
-        import control  # noqa: F401
-        import filterpy.kalman  # noqa: F401
-
-        import inserr.drift.analysis  # noqa: F401
-        import inserr.drift.study  # noqa: F401
-
-        one, csv1 = timed(grid, root, "1 worker", workers=1)
-        two, csv2 = timed(grid, root, "2 processes", workers=2, scheduler="processes")
-        assert csv1 == csv2, "results differ between 1 and 2 workers"
-        if args.threads:
-            threads, csv3 = timed(grid, root, "2 threads", workers=2, scheduler="threads")
-            assert csv3 == csv1, "results differ with threads"
-            print(f"sweep_speedup_2_threads: {one / threads:.2f}")
+        _, csv1 = timed(grid, root / "one", "1 worker", workers=1)
+        two, csv2 = timed(grid, root / "two", "2 workers", workers=2, scheduler="processes")
+    assert csv1 == csv2, "results differ between 1 and 2 workers"
     print("results.csv identical for 1 and 2 workers")
-    print(f"sweep_speedup_2_workers: {one / two:.2f}")
+    print(f"sweep_points_per_second: {len(grid.points) / two:.2f}")
 
 
 if __name__ == "__main__":  # the guard matters: worker processes are spawned

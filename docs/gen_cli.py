@@ -72,12 +72,51 @@ def command_reference(name: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def offered_flags() -> dict[str, list[str]]:
+    """Flag name (without dashes) -> the commands that offer it, from their parsers."""
+    out: dict[str, list[str]] = {}
+    for name in available_commands():
+        for action in _subparser(name)._actions:
+            for option in action.option_strings:
+                out.setdefault(option.removeprefix("--"), []).append(name)
+    return out
+
+
+def flag_table() -> str:
+    """Markdown table of :data:`inserr.scenario.flags.FLAGS`: key, unit, help, commands."""
+    from inserr.core.units import UNITS
+    from inserr.scenario.flags import FLAGS
+
+    offered = offered_flags()
+    lines = [
+        "## Flag table",
+        "",
+        "Every value flag of every command, the scenario key it overrides and its unit for "
+        "bare numbers (the default is the key's, per study: see each command below).",
+        "",
+        "| flag | scenario key | unit | what | commands |",
+        "|---|---|---|---|---|",
+    ]
+    for name, flag in FLAGS.items():
+        keys = ", ".join(f"`{k}`" for k in flag.keys)
+        commands = ", ".join(offered.get(name, []))
+        unit = flag.unit or ("written with the value" if flag.spec.kind in UNITS else "")
+        lines.append(f"| `--{name}` | {keys} | {_cell(unit)} | {_cell(flag.help)} | {commands} |")
+    return "\n".join(lines) + "\n"
+
+
 def reference() -> str:
-    """Markdown reference of every available ``inserr`` command."""
+    """Markdown reference of every available ``inserr`` command, after the flag table."""
     commands = available_commands()
     index = ["| command | what it does |", "|---|---|"]
     index += [f"| [`inserr {n}`](#inserr-{n}) | {_cell(h)} |" for n, (_, h) in commands.items()]
-    return "\n".join(index) + "\n\n" + "\n".join(command_reference(n) for n in commands)
+    return (
+        "\n".join(index)
+        + "\n\n"
+        + flag_table()
+        + "\n"
+        + "\n".join(command_reference(n) for n in commands)
+    )
 
 
 if __name__ == "__main__":

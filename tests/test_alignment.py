@@ -255,7 +255,7 @@ def test_input_errors():
 
 
 def test_cli_align_static_reproduces_the_floors(capsys):
-    argv = ["align", "--scheme", "none", "--lat", "34", "--minutes", "20",
+    argv = ["align", "--scheme", "none", "--lat", "34", "--duration", "20 min",
             "--gyro-bias", "0.003", "--accel-bias", "30", "--json"]  # fmt: skip
     assert main(argv) == 0
     out = json.loads(capsys.readouterr().out)
@@ -281,17 +281,17 @@ def test_cli_align_static_reproduces_the_floors(capsys):
     assert out["convergence_time_s"]["accel_bias_x_ug"] is None  # not estimated
 
 
-@pytest.mark.parametrize("prior", [None, ("3600", "600")])
+@pytest.mark.parametrize("prior", [None, ("3600", "36000")])
 def test_cli_align_floors_account_for_the_attitude_prior(prior, capsys):
     """At 100 micro-g / 0.01 deg/h the default 60 arcsec / 60 arcmin attitude prior is
     real information (tilt 19.5 against nabla/g = 20.6 arcsec): the reported floor must
     combine it (1/s^2 = 1/s0^2 + 1/floor^2), and a diffuse prior must give the textbook
     floor. 2 % covers the Omega sin L coupling and the 20-min convergence (< 0.6 % seen).
     """
-    argv = ["align", "--scheme", "none", "--lat", "34", "--minutes", "20",
+    argv = ["align", "--scheme", "none", "--lat", "34", "--duration", "20 min",
             "--gyro-bias", "0.01", "--accel-bias", "100", "--json"]  # fmt: skip
-    if prior:
-        argv += ["--initial-tilt", prior[0], "--initial-heading", prior[1]]
+    if prior:  # tilts and heading, all in arcsec (600 arcmin = 36000 arcsec)
+        argv += ["--initial-attitude", f"{prior[0]},{prior[0]},{prior[1]}"]
     assert main(argv) == 0
     out = json.loads(capsys.readouterr().out)
     s0_tilt, s0_head = (60.0, 60.0) if prior is None else (3600.0, 600.0)
@@ -312,7 +312,7 @@ def test_cli_align_floors_account_for_the_attitude_prior(prior, capsys):
 
 def test_cli_align_report(tmp_path, capsys):
     out_dir = tmp_path / "rep"
-    argv = ["align", "--scheme", "none,two-position", "--minutes", "3", "--stop", "30",
+    argv = ["align", "--schemes", "none,two-position", "--duration", "3 min", "--stop", "30",
             "--arw", "0.0005", "--vrw", "5", "--out", str(out_dir), "--json"]  # fmt: skip
     assert main(argv) == 0
     out = json.loads(capsys.readouterr().out)
@@ -325,7 +325,10 @@ def test_cli_align_report(tmp_path, capsys):
     "argv",
     [
         ["align", "--scheme", "spin"],
-        ["align", "--minutes", "0"],
+        ["align", "--duration", "0 min"],
+        ["align", "--duration", "10"],  # a duration carries its unit
+        ["align", "--initial-velocity", "0.01,0.01,0"],  # one prior 1 sigma for all axes
+        ["align", "--gyro-bias", "-0.01"],  # also the prior 1 sigma: >= 0
         ["align", "--gyro-bias", "1,2"],
         ["align", "--zupt-rate", "0"],
         ["align", "--yaw-swing", "6"],
@@ -370,7 +373,7 @@ def test_unmodelled_misalignment_and_scale_factor_kick_the_true_attitude_on_a_tu
 
 
 def test_cli_align_truth_only_errors_move_the_run_not_the_sigmas(capsys):
-    base = ["align", "--scheme", "two-position", "--minutes", "2", "--stop", "30", "--json"]
+    base = ["align", "--scheme", "two-position", "--duration", "2 min", "--stop", "30", "--json"]
     assert main(base) == 0
     plain = json.loads(capsys.readouterr().out)
     assert main(base + ["--gyro-misalignment", "10", "--gyro-sf", "10"]) == 0

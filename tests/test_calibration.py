@@ -477,7 +477,7 @@ def test_toml_position_set_reproduces_p1(tmp_path):
         (P1_TOML.replace('inner = "180 deg"', "inner = 180"), "positions[1].inner"),
         (P1_TOML.replace('dwell = "300 s"', 'dwell = "-3 s"'), "positions[0].dwell"),
         (P1_TOML.replace("[1, -1, 0]", '"z"'), "table.inner_axis"),
-        (P1_TOML.replace("[table]", "[table"), "--method"),
+        (P1_TOML.replace("[table]", "[table"), "calibration.method"),
     ],
 )
 def test_toml_errors_name_the_field(tmp_path, text, field):
@@ -540,13 +540,14 @@ def test_cli_design(capsys):
 @pytest.mark.parametrize(
     "argv, field",
     [
-        (["--method", "seven-position"], "--method"),
-        (["--lat", "90"], "--lat"),
-        (["--lat", "-95"], "--lat"),
-        (["--dwell", "-5"], "--dwell"),
-        (["--arw", "nan"], "--arw"),
-        (["--arw", "0.001 m/s"], "--arw"),
-        (["--runs", "1"], "--runs"),
+        (["--method", "seven-position"], "--method (calibration.method)"),
+        (["--lat", "90"], "--lat (site.latitude)"),
+        (["--lat", "-95"], "--lat (site.latitude)"),
+        (["--stop", "-5"], "--stop (scheme.stop)"),  # the dwell at every position
+        (["--stop", "0"], "--stop (scheme.stop)"),
+        (["--arw", "nan"], "--arw (imu.arw)"),
+        (["--arw", "0.001 m/s"], "--arw (imu.arw)"),
+        (["--runs", "1"], "--runs (scenario.runs)"),
         (["--positioning-model", "wobbly"], "--positioning-model"),
     ],
 )
@@ -562,7 +563,7 @@ def test_cli_bad_input(capsys, tmp_path, argv, field):
 @pytest.mark.parametrize(
     "text, field",
     [
-        ("[table\n", "--method"),
+        ("[table\n", "--method (calibration.method)"),
         (P1_TOML + "\nbogus = 1\n", "bogus"),
         (P1_TOML.replace("6 deg/s", "6 m"), "table.rate"),
     ],

@@ -24,28 +24,34 @@ def run_module():
 
 
 def test_scenario_is_p1(run_module):
-    sc = run_module.load_scenario(SCRIPT.parent / "scenario.toml")
+    sc = run_module.load(SCRIPT.parent / "scenario.toml")
     deg_h = math.pi / 180 / 3600
-    assert sc["site"]["latitude"] == pytest.approx(math.radians(34.0))
-    assert sc["truth"]["gyro_bias"] / deg_h == pytest.approx([2.04173693, 3.01844241, 2.09545751])
-    assert sc["truth"]["gyro_scale_factor"] == pytest.approx([1e-4] * 3)
-    assert sc["truth"]["gyro_misalignment"] == pytest.approx([2.145e-5] * 6)
-    assert sc["table"]["positioning_error"] == pytest.approx(math.radians(3 / 3600))
-    assert sc["monte_carlo"]["runs"] == 100
-    assert sc["noise"]["sample_rate"] == 100.0
+    assert sc.site.lat == pytest.approx(math.radians(34.0))
+    assert sc.imu.gyro_bias / deg_h == pytest.approx([2.04173693, 3.01844241, 2.09545751])
+    assert sc.imu.gyro_scale_factor == pytest.approx([1e-4] * 3)
+    assert sc.imu.gyro_misalignment == pytest.approx([2.145e-5] * 6)
+    assert sc.value("calibration.positioning_error") == pytest.approx(math.radians(3 / 3600))
+    assert sc.value("scenario.runs") == 100
+    assert sc.value("imu.sample_rate") == 100.0
+    assert sc.scheme_stop == 300.0  # P1 gives no dwell: a 5-minute stop
+    assert sc.value("analysis.methods.sets") == ("offaxis-four-position", "six-position")
 
 
 def test_scenario_errors_name_the_field(run_module, tmp_path):
     text = (SCRIPT.parent / "scenario.toml").read_text()
     bad = tmp_path / "s.toml"
-    bad.write_text(text.replace('latitude = "34 deg"', 'latitude = "34 deg"\nlongitude = "1 deg"'))
+    bad.write_text(text.replace('latitude = "34 deg"', 'latitude = "34 deg"\nlongitud = "1 deg"'))
     with pytest.raises(InputError) as exc:
-        run_module.load_scenario(bad)
-    assert exc.value.field == "site.longitude"
-    bad.write_text(text.replace('dwell = "300 s"', 'dwell = "300 m"'))
+        run_module.load(bad)
+    assert exc.value.field == "site.longitud"
+    bad.write_text(text.replace('stop = "300 s"', 'stop = "300 m"'))
     with pytest.raises(InputError) as exc:
-        run_module.load_scenario(bad)
-    assert exc.value.field == "table.dwell"
+        run_module.load(bad)
+    assert exc.value.field == "scheme.stop"
+    bad.write_text(text.replace("tolerance = 0.10", "tolerance = 0.10\ntolerence = 1"))
+    with pytest.raises(InputError) as exc:
+        run_module.load(bad)
+    assert exc.value.field == "analysis.verdict.tolerence"
 
 
 def _comparison(run_module, ratios):

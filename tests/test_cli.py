@@ -30,8 +30,8 @@ def test_drift_json_keys_and_static_longitude_drift(capsys):
             "none",
             "--lat",
             "34",
-            "--hours",
-            "24",
+            "--duration",
+            "24 h",
             "--gyro-bias",
             "0.02",
             "--accel-bias",
@@ -65,7 +65,7 @@ def test_drift_json_keys_and_static_longitude_drift(capsys):
 
 
 def test_drift_with_noise_reports_covariance(capsys):
-    d = _json(capsys, ["drift", "--hours", "6", "--arw", "0.001", "--vrw", "10", "--json"])
+    d = _json(capsys, ["drift", "--duration", "6 h", "--arw", "0.001", "--vrw", "10", "--json"])
     assert d["final_horizontal_1sigma_nmi"] > 0
     assert set(d["error_budget"]) == {"arw", "vrw"}
 
@@ -105,16 +105,19 @@ def test_run_writes_a_complete_report(tmp_path, capsys):
 
 
 BAD = [
-    (["drift", "--scheme", "three-position"], "--scheme"),
-    (["drift", "--lat", "90"], "latitude"),
-    (["drift", "--lat", "-95"], "latitude"),
-    (["drift", "--hours", "-3"], "duration"),
-    (["drift", "--hours", "0"], "duration"),
+    (["drift", "--scheme", "three-position"], "--scheme (scheme.name)"),
+    (["drift", "--lat", "90"], "--lat (site.latitude)"),
+    (["drift", "--lat", "-95"], "--lat (site.latitude)"),
+    (["drift", "--duration", "-3 h"], "--duration (scenario.duration)"),
+    (["drift", "--duration", "0 h"], "--duration (scenario.duration)"),
+    (["drift", "--duration", "3"], "no unit"),  # hours in drift, minutes in align: no default
+    (["drift", "--gyro-correlation-time", "0"], "--gyro-correlation-time"),
     (["drift", "--gyro-bias", "nan"], "imu.gyro_bias"),
     (["drift", "--gyro-bias", "0.02 furlongs"], "imu.gyro_bias"),
     (["drift", "--gyro-bias", "1,2"], "imu.gyro_bias"),
     (["drift", "--yaw-swing", "6"], "--yaw-swing"),
-    (["cycle", "--scheme", "flexible-two-position"], "--scheme"),
+    (["cycle", "--scheme", "flexible-two-position"], "--scheme (scheme.name)"),
+    (["cycle"], "scheme.name"),
 ]
 
 
@@ -136,7 +139,7 @@ def test_bad_flags_give_one_clear_error(argv, field, capsys, tmp_path):
         ('[imu]\ngyro_bais = "0.02 deg/h"\n', "imu.gyro_bais"),
         ('[sight]\nlatitude = "34 deg"\n', "sight"),
         ('[imu\ngyro_bias = "0.02 deg/h"\n', "malformed TOML"),
-        ('[scheme]\nname = "spin"\n', "--scheme"),
+        ('[scheme]\nname = "spin"\n', "scheme.name"),
         ('[site]\nlatitude = "90 deg"\n', "site.latitude"),
         ('[compare]\nschemes = ["none", "spin"]\n', "compare.schemes"),
         ('[scenario]\nduration = "-1 h"\n', "scenario.duration"),
@@ -164,8 +167,8 @@ def test_same_inputs_same_numbers(capsys):
         "drift",
         "--scheme",
         "flexible-two-position",
-        "--hours",
-        "3",
+        "--duration",
+        "3 h",
         "--gyro-bias",
         "0.01",
         "--yaw-swing",
@@ -184,7 +187,7 @@ def test_out_never_replaces_a_directory_inserr_did_not_write(tmp_path, capsys, m
     precious = tmp_path / "precious"
     precious.mkdir()
     (precious / "notes.txt").write_text("keep me")
-    argv = ["drift", "--hours", "1", "--gyro-bias", "0.01"]
+    argv = ["drift", "--duration", "1 h", "--gyro-bias", "0.01"]
     assert main(argv + ["--out", str(precious)]) == 2
     err = capsys.readouterr().err
     assert "--out" in err and "not an inserr report" in err
@@ -203,7 +206,7 @@ def test_out_replaces_an_earlier_report(tmp_path, capsys):
     out = tmp_path / "rep"
 
     def argv(bias):
-        return ["drift", "--hours", "1", "--gyro-bias", bias, "--json", "--out", str(out)]
+        return ["drift", "--duration", "1 h", "--gyro-bias", bias, "--json", "--out", str(out)]
 
     assert main(argv("0.01")) == 0
     first = json.loads(capsys.readouterr().out)
@@ -219,10 +222,13 @@ def test_non_utf8_scenario_and_oversized_run_are_input_errors(tmp_path, capsys):
     scen.write_bytes(b"\xff\xfe[site]\n")
     assert main(["run", str(scen), "--out", str(tmp_path / "r")]) == 2
     assert "UTF-8" in capsys.readouterr().err
-    # 100000 h at 1 s would need ~130 GB; refused before any work, naming the fix.
-    assert main(["drift", "--hours", "100000"]) == 2
+    # 100000 h at 1 s would need ~130 GB; refused before any work, naming the key and
+    # the fix. output.step was not given as a flag, so the message names no flag.
+    assert main(["drift", "--duration", "100000 h"]) == 2
     err = capsys.readouterr().err
-    assert "output.step" in err and "--step" in err
+    assert "error: output.step: " in err and "at least 120 s" in err
+    assert main(["drift", "--duration", "100000 h", "--step", "60"]) == 2
+    assert "error: --step (output.step): " in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["binary.toml"]
 
 
@@ -239,9 +245,9 @@ def test_interrupt_is_one_line_and_status_130(monkeypatch, capsys):
 
 
 def test_flag_errors_name_the_flag_typed(capsys):
-    assert main(["drift", "--hours", "1", "--arw", "-1"]) == 2
+    assert main(["drift", "--duration", "1 h", "--arw", "-1"]) == 2
     assert capsys.readouterr().err.startswith("inserr drift: error: --arw (imu.arw):")
-    assert main(["drift", "--hours", "1", "--gyro-misalignment", "1,2"]) == 2
+    assert main(["drift", "--duration", "1 h", "--gyro-misalignment", "1,2"]) == 2
     assert "xy,xz,yx,yz,zx,zy" in capsys.readouterr().err
 
 

@@ -410,9 +410,9 @@ def test_cycle_cli_bad_inputs_give_one_clear_error(tmp_path, capsys):
         encoding="utf-8",
     )
     for argv, field in (
-        (["cycle"], "--scheme"),
-        (["cycle", "--json"], "--scheme"),
-        (["cycle", str(path)], "--scheme"),  # closed loop: no fixed cycle
+        (["cycle"], "scheme.name"),
+        (["cycle", "--json"], "scheme.name"),
+        (["cycle", str(path)], "scheme.name"),  # closed loop: no fixed cycle (from the file)
         (["cycle", str(tmp_path / "missing.toml")], "missing.toml"),
         (["cycle", str(path), "--scheme", "custom"], "scheme.steps"),
     ):

@@ -127,7 +127,7 @@ def test_cli_reference_follows_the_parsers():
     text = load_docs_module("gen_cli").command_reference("sweep")
     assert text.startswith("## `inserr sweep`")
     for option in (
-        "`--param` (required) (repeatable)",
+        "`--param` (repeatable)",  # or sweep.parameters in the scenario file
         "`--scheduler`",
         "`--workers`",
         "`--out`",

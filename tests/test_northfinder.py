@@ -502,7 +502,7 @@ def test_instrument_rejects_bad_input(kwargs, field):
 
 # --- CLI ----------------------------------------------------------------------------------
 
-DONE_WHEN = "--lat 34 --heading 30 --pitch 1 --roll -2 --minutes 3 --runs 50 --seed 1 --json"
+DONE_WHEN = "--lat 34 --heading 30 --pitch 1 --roll -2 --duration 3min --runs 50 --seed 1 --json"
 
 
 def test_cli_done_when_command(capsys, tmp_path):
@@ -531,18 +531,22 @@ def test_cli_done_when_command(capsys, tmp_path):
 @pytest.mark.parametrize(
     "change, flag",
     [
-        (["--lat", "90"], "--lat"),
-        (["--lat", "-90"], "--lat"),
-        (["--lat", "nan"], "--lat"),
-        (["--minutes", "-3"], "--minutes"),
-        (["--arw", "0.001 deg/h"], "--arw"),
-        (["--lat", "34 m"], "--lat"),
-        (["--runs", "0"], "--runs"),
-        (["--rate", "0"], "--rate"),
+        (["--lat", "90"], "--lat (site.latitude)"),
+        (["--lat", "-90"], "--lat (site.latitude)"),
+        (["--lat", "nan"], "--lat (site.latitude)"),
+        (["--duration=-3min"], "--duration (scenario.duration)"),
+        (["--duration", "0.5s"], "--duration (scenario.duration)"),  # < one filter period
+        (["--arw", "0.001 deg/h"], "--arw (imu.arw)"),
+        (["--arw", "0"], "--arw (imu.arw)"),  # the bound needs white noise
+        (["--lat", "34 m"], "--lat (site.latitude)"),
+        (["--runs", "0"], "--runs (scenario.runs)"),
+        (["--rate", "0"], "--rate (scheme.rate)"),
+        (["--filter-period", "0.015"], "--filter-period (northfinder.filter_period)"),
+        (["--gyro-bias", "0.1,0.2,0.3"], "--gyro-bias (imu.gyro_bias)"),  # a single gyro
     ],
 )
 def test_cli_bad_input_one_line_exit_2_no_output(change, flag, capsys, tmp_path):
-    args = ["northfind", "--lat", "34", "--heading", "30", "--runs", "2", "--minutes", "1"]
+    args = ["northfind", "--lat", "34", "--heading", "30", "--runs", "2", "--duration", "1min"]
     out = tmp_path / "report"
     rc = main([*args, *change, "--out", str(out)])
     captured = capsys.readouterr()
@@ -556,7 +560,7 @@ def test_cli_bad_input_one_line_exit_2_no_output(change, flag, capsys, tmp_path)
 def test_cli_declared_hemisphere_not_the_simulated_one(capsys):
     """No --hemisphere means north, even at a southern --lat: mirror root and a warning."""
     base = ["northfind", "--lat", "-34", "--heading", "30", "--pitch", "1", "--roll", "-2"]
-    fast = ["--runs", "10", "--minutes", "2", "--sample-rate", "10", "--json"]
+    fast = ["--runs", "10", "--duration", "2 min", "--sample-rate", "10", "--json"]
     assert main([*base, *fast]) == 0
     res = json.loads(capsys.readouterr().out)
     assert res["hemisphere_declared"] == "north"

@@ -242,7 +242,15 @@ def test_cli_two_headings_rank_ten(capsys):
 def test_cli_full_model_over_a_scheme(capsys):
     out = _json(
         capsys,
-        ["observability", "--scheme", "four-position", "--minutes", "6", "--position", "--json"],
+        [
+            "observability",
+            "--scheme",
+            "four-position",
+            "--duration",
+            "6 min",
+            "--position-updates",
+            "--json",
+        ],
     )
     assert out["n_states"] == 15 and out["rank"] == 15
 
@@ -254,8 +262,10 @@ def test_cli_full_model_over_a_scheme(capsys):
         ["observability", "--lat", "90", "--headings", "0"],
         ["observability"],
         ["observability", "--headings", "0", "--scheme", "none"],
-        ["observability", "--headings", "0", "--position"],
-        ["observability", "--headings", "0", "--dwell", "-1"],
+        ["observability", "--headings", "0", "--position-updates"],
+        ["observability", "--headings", "0", "--stop", "-1"],
+        ["observability", "--headings", "0", "--stop", "0"],
+        ["observability", "--scheme", "none", "--model", "alignment10"],
     ],
 )
 def test_cli_bad_input_exits_2(argv, capsys):

@@ -85,7 +85,7 @@ def test_validate_command_without_the_extra_exits_2_with_the_message(monkeypatch
     from inserr.cli.main import main
 
     _hide_pyins(monkeypatch)
-    status = main(["validate", "--hours", "0.1", "--gyro-bias", "0.02", "--json"])
+    status = main(["validate", "--duration", "0.1 h", "--gyro-bias", "0.02", "--json"])
     err = capsys.readouterr().err
     assert status == 2
     assert "inserr[reference]" in err
@@ -406,13 +406,13 @@ def test_validate_command_reports_json(pyins, capsys, tmp_path):
             "two-position",
             "--stop",
             "120",
-            "--hours",
-            "0.5",
+            "--duration",
+            "0.5 h",
             "--gyro-bias",
             "0.02",
             "--accel-bias",
             "100",
-            "--imu-rate",
+            "--sample-rate",
             "20",
             "--out",
             str(out),
@@ -435,6 +435,7 @@ def test_validate_command_reports_json(pyins, capsys, tmp_path):
 def test_monte_carlo_without_a_random_error_is_refused_before_any_work(pyins, capsys):
     from inserr.cli.main import main
 
-    status = main(["validate", "--hours", "0.2", "--gyro-bias", "0.02", "--runs", "5", "--json"])
-    assert status == 2
-    assert "--random-constants" in capsys.readouterr().err
+    argv = ["validate", "--duration", "0.2 h", "--gyro-bias", "0.02", "--runs", "5", "--json"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "--runs (scenario.runs)" in err and "validate.random_constants" in err

@@ -19,7 +19,7 @@ from inserr.core.units import (
     parse_quantity,
 )
 from inserr.scenario.flags import FLAGS
-from inserr.scenario.schema import SCHEMA, load_scenario, scenario_from_dict
+from inserr.scenario.schema import SCHEMA, STUDY_DEFAULTS, load_scenario, scenario_from_dict
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "scenarios.md"
 
@@ -28,12 +28,14 @@ def _toml_blocks():
     return re.findall(r"```toml\n(.*?)```", DOCS.read_text(), re.S)
 
 
-@pytest.mark.parametrize("index", range(2))
+@pytest.mark.parametrize("index", range(len(_toml_blocks())))
 def test_documented_examples_load(index, tmp_path):
     block = _toml_blocks()[index]
     path = tmp_path / "s.toml"
     path.write_text(block)
     scen = load_scenario(path)
+    for study in STUDY_DEFAULTS:  # every study accepts every section
+        load_scenario(path, study=study)
     if index == 0:
         assert scen.site.lat == pytest.approx(34.246 * DEG)
         assert np.allclose(scen.imu.gyro_bias, 0.003 * DEG_PER_HOUR)
@@ -42,10 +44,18 @@ def test_documented_examples_load(index, tmp_path):
         assert scen.imu.arw == pytest.approx(0.0005 * DEG_PER_SQRT_HOUR)
         assert scen.motion.name == "yaw-swing" and scen.motion.period == 120.0
         assert scen.compare == ("none", "flexible-two-position", "heading-isolation")
-    else:
+    elif "[[scheme.steps]]" in block:  # the custom scheme
         steps = scen.scheme_options["steps"]
         assert [s.angle for s in steps] == pytest.approx([math.pi, -math.pi])
         assert steps[0].rotation_time == 18.0
+    elif "[alignment]" in block:  # the study sections
+        assert scen.value("alignment.position_sigma") == 1.0
+        assert scen.value("observability.headings") == pytest.approx((0.0, math.pi))
+        assert scen.value("calibration.design_sizes") == (4, 5, 6)
+        assert scen.value("calibration.positioning_error") == pytest.approx(3 * ARCSEC)
+        assert scen.value("northfinder.hemisphere") == "north"
+        assert scen.value("validate.chunk") == 3600.0
+        assert scen.value("sweep.parameters") == ("stop=60,300", "rate=3,6")
 
 
 def test_unit_conversions_against_definitions():
@@ -70,9 +80,10 @@ def test_unit_conversions_against_definitions():
 
 
 def test_every_flag_names_a_scenario_key():
-    for flag, (key, _, _) in FLAGS.items():
-        section, _, name = key.partition(".")
-        assert name in SCHEMA[section], flag
+    for name, flag in FLAGS.items():
+        for key in flag.keys:
+            section, _, k = key.partition(".")
+            assert k in SCHEMA[section], name
 
 
 def test_with_changes_and_unknown_keys():

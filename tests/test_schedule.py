@@ -216,5 +216,5 @@ def test_bad_durations_and_schemes_raise_input_errors():
         build_timeline(build_scheme("none", RATE, 300.0).plan(Motion(), 10.0), Motion(), -5.0)
     with pytest.raises(InputError, match="unknown scheme"):
         build_scheme("three-position", RATE, 300.0)
-    with pytest.raises(InputError, match="--rate"):
+    with pytest.raises(InputError, match="scheme.rate"):
         build_scheme("two-position", float("nan"), 300.0)

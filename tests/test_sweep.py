@@ -27,7 +27,7 @@ from inserr.sweep.store import is_sweep_figure, sweep_figures
 # Gauss-Markov gyro bias (rotating noise states) and the grid short stops: the
 # combination whose noise results once depended on which points a worker process
 # had run before (shared discretization cache), which the identity tests must catch.
-BASE = ["--scheme", "four-position", "--lat", "34", "--hours", "1", "--gyro-bias", "0.02",
+BASE = ["--scheme", "four-position", "--lat", "34", "--duration", "1 h", "--gyro-bias", "0.02",
         "--accel-bias", "100", "--arw", "0.001", "--gyro-bias-instability", "0.001"]  # fmt: skip
 GRID = ["--param", "stop=20,30", "--param", "rate=6,10"]
 
@@ -39,7 +39,7 @@ def sweep(tmp: Path, *extra: str, grid: list[str] = GRID) -> int:
 
 def sweep_command(out: Path, param: str, workers: int) -> tuple[list[str], dict[str, str]]:
     """``inserr sweep`` of 2 h points as a separate process (to kill it), and its env."""
-    cli = [sys.executable, "-m", "inserr.cli.main", "sweep", *BASE, "--hours", "2"]
+    cli = [sys.executable, "-m", "inserr.cli.main", "sweep", *BASE, "--duration", "2 h"]
     cmd = [*cli, "--param", param, "--workers", str(workers), "--no-plots", "--out", str(out)]
     return cmd, {**os.environ, "INSERR_NO_PROGRESS": "1"}
 
@@ -75,10 +75,12 @@ def test_param_syntax_flags_dotted_and_brackets():
         "motion.period": "120 s",
     }
     assert parse_param("scheme.delta=0.005,0.01").changes[0] == {"scheme.delta": 0.005}
-    assert parse_param("correlation-time=600").changes[0] == {
+    assert parse_param("gyro-correlation-time=600").changes[0] == {
         "imu.gyro_correlation_time": "600 s",
-        "imu.accel_correlation_time": "600 s",
     }
+    # The duration has no unit of its own (hours in drift, minutes in studies): a unit
+    # is always written.
+    assert parse_param("duration=6 h,1 d").changes[1] == {"scenario.duration": "1 d"}
 
 
 def test_grid_values_reach_the_scenario():
@@ -154,6 +156,8 @@ def test_changed_heading_history_file_recomputes_the_point(tmp_path, capsys, cou
         (["bogus=1,2"], "unknown parameter"),
         (["scheme.bogus=1 s"], "unknown scenario key"),
         (["compare.schemes=none"], "cannot be swept"),
+        (["alignment.zupt_rate=1 Hz,2 Hz"], "cannot be swept"),  # the drift analysis ignores it
+        (["duration=6,12"], "has no unit"),
         (["stop=60,60"], "duplicated"),
         (["stop=60,60 s"], "are the same"),
         (["stop=60", "stop=300"], "given twice"),
@@ -541,7 +545,7 @@ def test_sweep_out_never_mixes_with_a_users_files(tmp_path, monkeypatch, capsys)
     mine = tmp_path / "notes"
     mine.mkdir()
     (mine / "results.csv").write_text("my own table\n")
-    argv = ["sweep", "--hours", "1", "--param", "stop=60,120"]
+    argv = ["sweep", "--duration", "1 h", "--param", "stop=60,120"]
     assert main(argv + ["--out", str(mine)]) == 2
     assert "not an inserr sweep" in capsys.readouterr().err
     assert (mine / "results.csv").read_text() == "my own table\n"

@@ -29,12 +29,12 @@ import math
 import shutil
 import sys
 import tempfile
-import tomllib
 from pathlib import Path
 
 import numpy as np
 
-from inserr.alignment.filter import STATES, UNITS, AlignmentResult, Prior, Settings, static_floors
+from inserr.alignment.filter import STATES, UNITS, AlignmentResult, Prior, static_floors
+from inserr.alignment.inputs import AlignmentInputs, alignment_inputs
 from inserr.alignment.observability import alignment10, analyze, full_timeline
 from inserr.alignment.study import (
     SHOWN,
@@ -56,16 +56,28 @@ from inserr.core.units import (
     MICRO_G,
     MICRO_G_PER_SQRT_HZ,
     PPM,
-    parse_quantity,
 )
 from inserr.model.psi_model import ErrorModel, Layout
 from inserr.output.report import MARKER, check_report_dir, dumps, replace_dir
-from inserr.scenario.schema import scenario_from_dict
+from inserr.scenario.schema import Key, Scenario, load_scenario
 from inserr.schemes.vehicle_motion import YawSwing
 
 HERE = Path(__file__).resolve().parent
-#: Sections of scenario.toml that are this study's, not inserr's scenario schema.
-CUSTOM = ("alignment", "stop_sweep", "swing")
+#: This study's own tables of scenario.toml, ``[analysis.NAME]``, validated by the schema code.
+ANALYSIS = {
+    "quick": {
+        "duration": Key("time", None, "3 min", "length of the --quick smoke test"),
+        "stops": Key("time", "list", [], "stop times of the --quick stop sweep"),
+    },
+    "stop_sweep": {
+        "scheme": Key("str", None, "two-position", "scheme whose stop time is swept"),
+        "stops": Key("time", "list", [], "stop times"),
+    },
+    "swing": {
+        "amplitude": Key("angular_rate", None, "6 deg/s", "peak heading rate of the swing"),
+        "period": Key("time", None, "120 s", "period of the swing"),
+    },
+}
 #: Degree of observability sqrt(P0)/sqrt(Pk) above which a state counts as well
 #: estimated (sigma down by 10x), and below which as not estimated (down by < 20 %).
 WELL, NOT = 10.0, 1.25
@@ -74,41 +86,10 @@ WELL, NOT = 10.0, 1.25
 # ---------------------------------------------------------------------------------------
 # Inputs
 # ---------------------------------------------------------------------------------------
-def load(path: Path) -> tuple:
-    """The validated inserr scenario and this study's settings."""
-    data = tomllib.loads(path.read_text(encoding="utf-8"))
-    custom = {k: data.pop(k, {}) for k in CUSTOM}
-    scen = scenario_from_dict(data, base_dir=path.parent)
-    al, sw, swing = custom["alignment"], custom["stop_sweep"], custom["swing"]
-
-    def q(table, key, kind, section):
-        if key not in table:
-            raise InputError(f"{section}.{key}", "missing", "add it to scenario.toml")
-        return float(parse_quantity(table[key], kind, f"{section}.{key}"))
-
-    cfg = {
-        "zupt_rate": q(al, "zupt_rate", "frequency", "alignment"),
-        "zupt_sigma": q(al, "zupt_sigma", "velocity", "alignment"),
-        "initial_tilt": q(al, "initial_tilt", "angle", "alignment"),
-        "initial_heading": q(al, "initial_heading", "angle", "alignment"),
-        "initial_velocity": q(al, "initial_velocity", "velocity", "alignment"),
-        "initial_position": q(al, "initial_position", "length", "alignment"),
-        "vertical": al.get("vertical", "free"),
-        "quick_duration": q(al, "quick_duration", "time", "alignment"),
-        "sweep_scheme": sw.get("scheme", "two-position"),
-        "stops": [
-            float(parse_quantity(s, "time", "stop_sweep.stops")) for s in sw.get("stops", [])
-        ],
-        "quick_stops": [
-            float(parse_quantity(s, "time", "stop_sweep.quick_stops"))
-            for s in sw.get("quick_stops", [])
-        ],
-        "swing_amplitude": q(swing, "amplitude", "angular_rate", "swing"),
-        "swing_period": q(swing, "period", "time", "swing"),
-    }
-    if scen.imu.has_bias_instability:
-        raise InputError("imu", "the alignment study models constant biases and white noise only")
-    return scen, cfg
+def load(path: Path) -> tuple[Scenario, AlignmentInputs]:
+    """The validated scenario (alignment study, with this study's sections) and its inputs."""
+    scen = load_scenario(path, study="alignment", analysis=ANALYSIS)
+    return scen, alignment_inputs(scen)
 
 
 # ---------------------------------------------------------------------------------------
@@ -255,10 +236,9 @@ def classic(site, heading: float) -> dict:
 
 
 def stop_sweep(
-    site, motion, rate, cfg, stops, duration, imu, prior, settings, floors
+    site, motion, rate, name, stops, duration, imu, prior, settings, floors
 ) -> tuple[list, dict]:
     rows, runs = [], {}
-    name = cfg["sweep_scheme"]
     for stop in stops:
         base = Base(site, motion, rate, stop)
         r = run_schemes(base, [name], duration, imu, prior, settings)[name]
@@ -789,7 +769,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default=None, help="output directory (default results/ or out/)")
     args = parser.parse_args(argv)
     try:
-        scen, cfg = load(Path(args.scenario))
+        scen, inp = load(Path(args.scenario))
     except InputError as exc:
         print(f"run.py: error: {exc}", file=sys.stderr)
         return 2
@@ -799,40 +779,20 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as exc:
         print(f"run.py: error: {exc}", file=sys.stderr)
         return 2
-    duration = cfg["quick_duration"] if args.quick else scen.duration
-    stops = cfg["quick_stops"] if args.quick else cfg["stops"]
-    names = list(scen.compare) or [scen.scheme_name]
+    duration = scen.value("analysis.quick.duration") if args.quick else scen.duration
+    stops = scen.value(f"analysis.{'quick' if args.quick else 'stop_sweep'}.stops")
+    names = list(inp.schemes)
     site, motion = scen.site, scen.motion
-    imu = ImuErrors(
-        gyro_bias=scen.imu.gyro_bias,
-        accel_bias=scen.imu.accel_bias,
-        arw=scen.imu.arw,
-        vrw=scen.imu.vrw,
-        gyro_scale_factor=scen.imu.gyro_scale_factor,
-        accel_scale_factor=scen.imu.accel_scale_factor,
-        gyro_misalignment=scen.imu.gyro_misalignment,
-        accel_misalignment=scen.imu.accel_misalignment,
-    )
+    imu, prior, settings, base = inp.imu, inp.prior, inp.settings, inp.base
     # The same runs without the scale factors and misalignments the filter does not
     # model (same noise realization), to show what they cost.
     imu_bias_only = ImuErrors(
         gyro_bias=imu.gyro_bias, accel_bias=imu.accel_bias, arw=imu.arw, vrw=imu.vrw
     )
-    tilt, head = cfg["initial_tilt"], cfg["initial_heading"]
-    prior = Prior(
-        attitude=np.array([tilt, tilt, head]),
-        velocity=cfg["initial_velocity"],
-        position=cfg["initial_position"],
-        gyro_bias=imu.gyro_bias,
-        accel_bias=imu.accel_bias,
-    )
-    settings = Settings(
-        zupt_rate=cfg["zupt_rate"],
-        zupt_sigma=cfg["zupt_sigma"],
-        vertical=cfg["vertical"],
-        seed=scen.seed,
-    )
-    base = Base(site, motion, scen.scheme_rate, scen.scheme_stop, scen.substep)
+    tilt, head = prior.attitude[0], prior.attitude[2]
+    sweep_scheme = scen.value("analysis.stop_sweep.scheme")
+    swing_amplitude = scen.value("analysis.swing.amplitude")
+    swing_period = scen.value("analysis.swing.period")
     floors = static_floors(
         site, imu.gyro_bias, imu.accel_bias, motion.attitude(0.0)[0], prior.attitude
     )
@@ -844,13 +804,13 @@ def main(argv: list[str] | None = None) -> int:
         motion.heading,
         motion.pitch,
         motion.roll,
-        amplitude=cfg["swing_amplitude"],
-        period=cfg["swing_period"],
+        amplitude=swing_amplitude,
+        period=swing_period,
     )
     swing_base = Base(site, swing_motion, scen.scheme_rate, scen.scheme_stop, scen.substep)
     swing = run_schemes(swing_base, names, duration, imu, prior, settings)
     sweep_rows, sweep_runs = stop_sweep(
-        site, motion, scen.scheme_rate, cfg, stops, duration, imu, prior, settings, floors
+        site, motion, scen.scheme_rate, sweep_scheme, stops, duration, imu, prior, settings, floors
     )
     results = {
         "quick": args.quick,
@@ -874,15 +834,15 @@ def main(argv: list[str] | None = None) -> int:
             "zupt_rate_hz": settings.zupt_rate,
             "zupt_sigma_m_s": settings.zupt_sigma,
             "vertical": settings.vertical,
-            "initial_tilt_arcsec": tilt / ARCSEC,
-            "initial_heading_arcmin": head / ARCMIN,
+            "initial_tilt_arcsec": float(tilt / ARCSEC),
+            "initial_heading_arcmin": float(head / ARCMIN),
             "initial_velocity_m_s": prior.velocity,
             "initial_position_m": prior.position,
             "rate_deg_s": math.degrees(scen.scheme_rate),
             "stop_s": scen.scheme_stop,
-            "sweep_scheme": cfg["sweep_scheme"],
-            "swing_amplitude_deg_s": math.degrees(cfg["swing_amplitude"]),
-            "swing_period_s": cfg["swing_period"],
+            "sweep_scheme": sweep_scheme,
+            "swing_amplitude_deg_s": math.degrees(swing_amplitude),
+            "swing_period_s": swing_period,
             "seed": scen.seed,
         },
         "static_floors": {

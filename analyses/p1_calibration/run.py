@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-import tomllib
+from dataclasses import replace as dataclass_replace
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +31,7 @@ from inserr.calibration.estimation import (
     parameter_unit,
     positioning_sigma,
 )
+from inserr.calibration.inputs import calibration_inputs
 from inserr.calibration.position_sets import (
     candidate_tables,
     describe_candidate,
@@ -54,84 +55,42 @@ from inserr.calibration.two_axis_table import (
     load_position_set,
 )
 from inserr.core.earth import Site
-from inserr.core.errors import InputError, require_latitude
+from inserr.core.errors import InputError
 from inserr.core.imu import ImuErrors
-from inserr.core.units import ARCSEC, DEG_PER_SQRT_HOUR, parse_quantity
+from inserr.core.units import ARCSEC, DEG_PER_SQRT_HOUR
 from inserr.output.progress import progress
 from inserr.output.report import Report, check_report_dir
+from inserr.scenario.schema import Key, Scenario, load_scenario
 
 HERE = Path(__file__).resolve().parent
 CLASSES = {"sf": slice(0, 3), "mis": slice(3, 9), "bias": slice(9, 12)}
 
 # --- scenario --------------------------------------------------------------------------
 
-_SCHEMA: dict[str, dict[str, tuple[str, int | None]]] = {
-    # section -> key -> (kind for parse_quantity, size) ; kind "" = plain value
-    "site": {"latitude": ("angle", None)},
-    "truth": {
-        "gyro_scale_factor": ("ratio", 3),
-        "gyro_misalignment": ("angle", 6),
-        "gyro_bias": ("angular_rate", 3),
-        "accel_scale_factor": ("ratio", 3),
-        "accel_misalignment": ("angle", 6),
-        "accel_bias": ("acceleration", 3),
+#: This study's own tables of scenario.toml, ``[analysis.NAME]``, validated by the schema code.
+ANALYSIS = {
+    "methods": {
+        "sets": Key("list", None, ["offaxis-four-position", "six-position"], "the two sets"),
     },
-    "noise": {"arw": ("arw", None), "vrw": ("vrw", None), "sample_rate": ("frequency", None)},
-    "table": {
-        "dwell": ("time", None),
-        "rate": ("angular_rate", None),
-        "positioning_error": ("angle", None),
-        "positioning_model": ("", None),
+    "sweeps": {
+        "dwell": Key("time", "list", [], "dwell per position"),
+        "arw": Key("arw", "list", [], "gyro angle random walk"),
+        "positioning_error": Key("angle", "list", [], "positioning-error half-width"),
     },
-    "monte_carlo": {"runs": ("", None), "seed": ("", None)},
-    "methods": {"sets": ("", None)},
-    "sweeps": {"dwell": ("time", None), "arw": ("arw", None), "positioning_error": ("angle", None)},
-    "verdict": {"tolerance": ("", None)},
+    "verdict": {"tolerance": Key("float", None, 0.10, "relative sigma difference 'the same'")},
 }
 
 
-def load_scenario(path: Path) -> dict[str, dict[str, Any]]:
-    """Parse the scenario file into SI values; unknown keys and bad units raise InputError."""
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError("--scenario", f"cannot read {str(path)!r}: {exc.strerror}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError("--scenario", f"{path.name} is not valid TOML ({exc})") from None
-    out: dict[str, dict[str, Any]] = {}
-    for section, body in raw.items():
-        if section not in _SCHEMA or not isinstance(body, dict):
-            raise InputError(section, "unknown section", f"known: {', '.join(_SCHEMA)}")
-        out[section] = {}
-        for key, value in body.items():
-            if key not in _SCHEMA[section]:
-                known = ", ".join(_SCHEMA[section])
-                raise InputError(f"{section}.{key}", "unknown key", f"known: {known}")
-            kind, size = _SCHEMA[section][key]
-            name = f"{section}.{key}"
-            if not kind:
-                out[section][key] = value
-            elif section == "sweeps":
-                out[section][key] = [parse_quantity(v, kind, name) for v in value]
-            elif size == 6:
-                # misalignments: one value for all six, or six values
-                v = parse_quantity(value, kind, name, size=6)
-                out[section][key] = v
-            else:
-                out[section][key] = parse_quantity(value, kind, name, size=size)
-    for section, keys in _SCHEMA.items():
-        for key in keys:
-            if key not in out.get(section, {}):
-                raise InputError(f"{section}.{key}", "missing", "add it to the scenario file")
-    require_latitude(out["site"]["latitude"], "site.latitude")
-    return out
+def load(path: Path) -> Scenario:
+    """The scenario file (a calibration scenario with this study's tables), validated."""
+    return load_scenario(path, study="calibration", analysis=ANALYSIS)
 
 
 def method_set(name: str, dwell: float, rate: float) -> PositionSet:
     """A built-in set, or a TOML position-set file relative to this directory."""
     if name in BUILTIN_SETS:
         return builtin_set(name, dwell, rate)
-    return load_position_set(HERE / name, dwell, rate, field_name="methods.sets")
+    return load_position_set(HERE / name, dwell, rate, field_name="analysis.methods.sets")
 
 
 # --- helpers --------------------------------------------------------------------------
@@ -198,37 +157,23 @@ def fmt(v: float, digits: int = 3) -> str:
 # --- the study -----------------------------------------------------------------------------
 
 
-def run_study(sc: dict[str, dict[str, Any]], quick: bool) -> tuple[Report, dict[str, Any]]:
-    site = Site(sc["site"]["latitude"])
-    t = sc["truth"]
-    imu = ImuErrors(
-        gyro_bias=t["gyro_bias"],
-        gyro_scale_factor=t["gyro_scale_factor"],
-        gyro_misalignment=t["gyro_misalignment"],
-        accel_bias=t["accel_bias"],
-        accel_scale_factor=t["accel_scale_factor"],
-        accel_misalignment=t["accel_misalignment"],
-        arw=sc["noise"]["arw"],
-        vrw=sc["noise"]["vrw"],
-    )
-    tab = sc["table"]
-    dwell, rate = tab["dwell"], tab["rate"]
-    runs = 30 if quick else int(sc["monte_carlo"]["runs"])
-    seed = int(sc["monte_carlo"]["seed"])
-    tol = float(sc["verdict"]["tolerance"])
-    cfg = MonteCarloConfig(
-        runs=runs,
-        seed=seed,
-        positioning_error=tab["positioning_error"],
-        positioning_model=tab["positioning_model"],
-        sample_rate=sc["noise"]["sample_rate"],
-    )
-    names = list(sc["methods"]["sets"])
+def run_study(scen: Scenario, quick: bool) -> tuple[Report, dict[str, Any]]:
+    inp = calibration_inputs(scen)
+    site, imu = inp.site, inp.truth
+    dwell, rate = inp.dwell, inp.rate
+    runs = 30 if quick else inp.config.runs
+    seed = inp.config.seed
+    tol = scen.value("analysis.verdict.tolerance")
+    cfg = dataclass_replace(inp.config, runs=runs)
+    names = list(scen.value("analysis.methods.sets"))
     if len(names) != 2:
         raise InputError("methods.sets", "give exactly two sets: the four- and the six-position")
     sets = {n: method_set(n, dwell, rate) for n in names}
     four, six = names
-    sweeps = {k: (v[::2] if quick else v) for k, v in sc["sweeps"].items()}
+    sweeps = {
+        k: list(scen.value(f"analysis.sweeps.{k}"))[:: 2 if quick else 1]
+        for k in ANALYSIS["sweeps"]
+    }
 
     results: dict[str, Any] = {
         "scenario": {
@@ -764,8 +709,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         check_report_dir(args.out, "--out")  # before any work: never replace a user's directory
-        sc = load_scenario(Path(args.scenario))
-        rep, results = run_study(sc, args.quick)
+        rep, results = run_study(load(Path(args.scenario)), args.quick)
     except InputError as exc:
         print(f"run.py: error: {exc}", file=sys.stderr)
         return 2

@@ -14,7 +14,6 @@ import math
 import os
 import sys
 import time
-import tomllib
 from dataclasses import replace
 from pathlib import Path
 
@@ -22,45 +21,77 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from inserr.core.errors import InputError
-from inserr.core.units import DEG, DEG_PER_HOUR, DEG_PER_S, DEG_PER_SQRT_HOUR, MIL, parse_quantity
+from inserr.core.units import DEG, DEG_PER_HOUR, DEG_PER_S, DEG_PER_SQRT_HOUR, MIL
 from inserr.northfinder.bounds import bias_instability_psd, crlb
 from inserr.northfinder.figures import heading_history_figure, latitude_history_figure
 from inserr.northfinder.filter import (
     hemisphere_name,
-    hemisphere_sign,
     period_measurements,
     run_filter,
     solve,
     wrap_angle,
 )
+from inserr.northfinder.inputs import northfinder_inputs
 from inserr.northfinder.instrument import Instrument, Pose, SensorGrade, simulate
 from inserr.northfinder.study import EQUATORIAL_BAND, POLAR_BAND, monte_carlo
 from inserr.output.progress import progress
 from inserr.output.report import Report
+from inserr.scenario.schema import Key, load_scenario
 
 HERE = Path(__file__).resolve().parent
 
 
 # --- scenario -------------------------------------------------------------------------
 
+#: This study's own tables of scenario.toml, ``[analysis.NAME]``, validated by the schema code.
+ANALYSIS = {
+    "monte_carlo": {
+        "quick_runs": Key("int", None, 30, "runs of every Monte Carlo in --quick"),
+        "check_runs": Key("int", None, 1000, "runs of the check at the required grade"),
+        "quick_check_runs": Key("int", None, 100, "the same in --quick"),
+    },
+    "requirement": {
+        "heading_1sigma": Key("angle", None, "0.5 mil", "required heading 1 sigma"),
+        "time": Key("time", None, "3 min", "in this time"),
+    },
+    "time_history": {
+        "duration": Key("time", None, "10 min", "length of the time history"),
+        "quick_duration": Key("time", None, "4 min", "the same in --quick"),
+    },
+    "rate_sweep": {
+        "rates": Key("angular_rate", "list", [], "table rates"),
+        "stress_bias_instability": Key("angular_rate", None, "0.05 deg/h", "harsher gyro GM"),
+        "stress_correlation_time": Key("time", None, "20 s", "its correlation time"),
+    },
+    "grade_sweep": {
+        "factors": Key("float-list", None, [], "every gyro error scaled by these"),
+        "latitudes": Key("angle", "list", [], "at these latitudes"),
+    },
+    "bias_instability": {
+        "correlation_times": Key("time", "list", [], "Gauss-Markov correlation times"),
+    },
+    "map": {
+        "bound_heading_step": Key("angle", None, "15 deg", "bound map: heading step"),
+        "bound_latitude_step": Key("angle", None, "5 deg", "bound map: latitude step"),
+        "bound_latitude_limit": Key("angle", None, "85 deg", "bound map: largest |latitude|"),
+        "quick_bound_heading_step": Key("angle", None, "45 deg", "the same in --quick"),
+        "quick_bound_latitude_step": Key("angle", None, "17 deg", "the same in --quick"),
+        "mc_headings": Key("angle", "list", [], "Monte Carlo map: headings"),
+        "mc_latitudes": Key("angle", "list", [], "Monte Carlo map: latitudes"),
+        "mc_runs": Key("int", None, 60, "Monte Carlo map: runs per cell"),
+        "quick_mc_headings": Key("angle", "list", [], "the same in --quick"),
+        "quick_mc_latitudes": Key("angle", "list", [], "the same in --quick"),
+    },
+    "small_angle": {
+        "gyro_tilts": Key("angle", "list", [], "gyro tilts"),
+        "accel_azimuths": Key("angle", "list", [], "accelerometer azimuths"),
+        "accel_tilts": Key("angle", "list", [], "accelerometer tilts"),
+    },
+}
 
-def _q(table: dict, key: str, kind: str, section: str) -> float:
-    """One quantity ``section.key`` of the scenario, in SI (InputError if missing)."""
-    if key not in table:
-        raise InputError(f"{section}.{key}", "missing from the scenario file")
-    return parse_quantity(table[key], kind, f"{section}.{key}")
 
-
-def _qlist(table: dict, key: str, kind: str, section: str) -> list[float]:
-    """A non-empty list of quantities ``section.key``, in SI."""
-    values = table.get(key)
-    if not isinstance(values, list) or not values:
-        raise InputError(f"{section}.{key}", "must be a non-empty list of quantities")
-    return [parse_quantity(v, kind, f"{section}.{key}") for v in values]
-
-
-def load_scenario(path: Path, quick: bool) -> dict:
-    """Parse the scenario file into SI values and library objects.
+def load(path: Path, quick: bool) -> dict:
+    """The scenario file (a north-finder scenario with this study's tables), in SI.
 
     Parameters
     ----------
@@ -76,70 +107,45 @@ def load_scenario(path: Path, quick: bool) -> dict:
         declared one, +1 or -1), run counts, ``seed``, ``requirement`` (rad), ``time``
         (s) and the sweep grids (rad, rad/s, s, or plain factors).
     """
-    data = tomllib.loads(path.read_text(encoding="utf-8"))
-    s, i, g = data["site"], data["instrument"], data["grade"]
-    pose = Pose(
-        _q(s, "latitude", "angle", "site"),
-        _q(s, "heading", "angle", "site"),
-        _q(s, "pitch", "angle", "site"),
-        _q(s, "roll", "angle", "site"),
-    )
-    instrument = Instrument(
-        table_rate=_q(i, "table_rate", "angular_rate", "instrument"),
-        sample_rate=_q(i, "sample_rate", "frequency", "instrument"),
-        filter_period=_q(i, "filter_period", "time", "instrument"),
-        gyro_tilt=_q(i, "gyro_tilt", "angle", "instrument"),
-        accel_azimuth=_q(i, "accel_azimuth", "angle", "instrument"),
-        accel_tilt=_q(i, "accel_tilt", "angle", "instrument"),
-    )
-    grade = SensorGrade(
-        gyro_arw=_q(g, "gyro_arw", "arw", "grade"),
-        gyro_bias=_q(g, "gyro_bias", "angular_rate", "grade"),
-        gyro_bias_instability=_q(g, "gyro_bias_instability", "angular_rate", "grade"),
-        gyro_correlation_time=_q(g, "gyro_correlation_time", "time", "grade"),
-        accel_vrw=_q(g, "accel_vrw", "vrw", "grade"),
-        accel_bias=_q(g, "accel_bias", "acceleration", "grade"),
-        accel_bias_instability=_q(g, "accel_bias_instability", "acceleration", "grade"),
-        accel_correlation_time=_q(g, "accel_correlation_time", "time", "grade"),
-    )
-    mc, req, th = data["monte_carlo"], data["requirement"], data["time_history"]
-    rs, gs, bi, mp, sa = (
-        data["rate_sweep"],
-        data["grade_sweep"],
-        data["bias_instability"],
-        data["map"],
-        data["small_angle"],
-    )
-    prefix = "quick_" if quick else ""
-    if "hemisphere" not in s:
-        raise InputError("site.hemisphere", "missing: declare 'north' or 'south' as a user would")
+    scen = load_scenario(path, study="northfinder", analysis=ANALYSIS)
+    inp = northfinder_inputs(scen)
+
+    def a(key: str):
+        value = scen.value(f"analysis.{key}")
+        if isinstance(value, tuple):
+            if not value:
+                raise InputError(f"analysis.{key}", "must be a non-empty list")
+            return list(value)
+        return value
+
+    q = "quick_" if quick else ""
     return {
-        "pose": pose,
+        "pose": inp.pose,
         # What the user tells the estimator, never derived from the simulated latitude.
-        "hemisphere": hemisphere_sign(s["hemisphere"]),
-        "instrument": instrument,
-        "grade": grade,
-        "runs": int(mc[prefix + "runs"]),
-        "check_runs": int(mc[prefix + "check_runs"]),
-        "seed": int(mc["seed"]),
-        "requirement": _q(req, "heading_1sigma", "angle", "requirement"),
-        "time": _q(req, "time", "time", "requirement"),
-        "history_duration": _q(th, prefix + "duration", "time", "time_history"),
-        "rates": _qlist(rs, "rates", "angular_rate", "rate_sweep"),
-        "stress_bi": _q(rs, "stress_bias_instability", "angular_rate", "rate_sweep"),
-        "stress_tau": _q(rs, "stress_correlation_time", "time", "rate_sweep"),
-        "factors": [float(f) for f in gs["factors"]],
-        "grade_latitudes": _qlist(gs, "latitudes", "angle", "grade_sweep"),
-        "bi_taus": _qlist(bi, "correlation_times", "time", "bias_instability"),
-        "map_heading_step": _q(mp, prefix + "bound_heading_step", "angle", "map"),
-        "map_lat_step": _q(mp, prefix + "bound_latitude_step", "angle", "map"),
-        "map_lat_limit": _q(mp, "bound_latitude_limit", "angle", "map"),
-        "mc_headings": _qlist(mp, prefix + "mc_headings", "angle", "map"),
-        "mc_latitudes": _qlist(mp, prefix + "mc_latitudes", "angle", "map"),
-        "mc_map_runs": int(mp["mc_runs"]) if not quick else int(mc["quick_runs"]),
-        "gyro_tilts": _qlist(sa, "gyro_tilts", "angle", "small_angle"),
-        "accel_azimuths": _qlist(sa, "accel_azimuths", "angle", "small_angle"),
-        "accel_tilts": _qlist(sa, "accel_tilts", "angle", "small_angle"),
+        "hemisphere": inp.hemisphere,
+        "instrument": inp.instrument,
+        "grade": inp.grade,
+        "runs": a("monte_carlo.quick_runs") if quick else inp.runs,
+        "check_runs": a(f"monte_carlo.{q}check_runs"),
+        "seed": inp.seed,
+        "requirement": a("requirement.heading_1sigma"),
+        "time": a("requirement.time"),
+        "history_duration": a(f"time_history.{q}duration"),
+        "rates": a("rate_sweep.rates"),
+        "stress_bi": a("rate_sweep.stress_bias_instability"),
+        "stress_tau": a("rate_sweep.stress_correlation_time"),
+        "factors": a("grade_sweep.factors"),
+        "grade_latitudes": a("grade_sweep.latitudes"),
+        "bi_taus": a("bias_instability.correlation_times"),
+        "map_heading_step": a(f"map.{q}bound_heading_step"),
+        "map_lat_step": a(f"map.{q}bound_latitude_step"),
+        "map_lat_limit": a("map.bound_latitude_limit"),
+        "mc_headings": a(f"map.{q}mc_headings"),
+        "mc_latitudes": a(f"map.{q}mc_latitudes"),
+        "mc_map_runs": a("map.mc_runs") if not quick else a("monte_carlo.quick_runs"),
+        "gyro_tilts": a("small_angle.gyro_tilts"),
+        "accel_azimuths": a("small_angle.accel_azimuths"),
+        "accel_tilts": a("small_angle.accel_tilts"),
     }
 
 
@@ -173,7 +179,7 @@ def time_history(sc: dict) -> tuple[dict, object]:
     Parameters
     ----------
     sc : dict
-        Scenario from :func:`load_scenario`.
+        Scenario from :func:`load`.
 
     Returns
     -------
@@ -219,7 +225,7 @@ def rate_sweep(sc: dict) -> dict:
     Parameters
     ----------
     sc : dict
-        Scenario from :func:`load_scenario`.
+        Scenario from :func:`load`.
 
     Returns
     -------
@@ -370,7 +376,7 @@ def grade_sweep(sc: dict) -> dict:
     Parameters
     ----------
     sc : dict
-        Scenario from :func:`load_scenario`.
+        Scenario from :func:`load`.
 
     Returns
     -------
@@ -492,7 +498,7 @@ def bias_instability_table(sc: dict) -> dict:
     Parameters
     ----------
     sc : dict
-        Scenario from :func:`load_scenario`.
+        Scenario from :func:`load`.
 
     Returns
     -------
@@ -524,7 +530,7 @@ def heading_latitude_map(sc: dict) -> dict:
     Parameters
     ----------
     sc : dict
-        Scenario from :func:`load_scenario`.
+        Scenario from :func:`load`.
 
     Returns
     -------
@@ -593,7 +599,7 @@ def small_angle_table(sc: dict) -> dict:
     Parameters
     ----------
     sc : dict
-        Scenario from :func:`load_scenario`.
+        Scenario from :func:`load`.
 
     Returns
     -------
@@ -768,7 +774,7 @@ def build_report(sc: dict, results: dict, history_result, quick: bool) -> Report
     Parameters
     ----------
     sc : dict
-        Scenario from :func:`load_scenario`.
+        Scenario from :func:`load`.
     results : dict
         The studies' results (what ``results.json`` holds).
     history_result : MonteCarloResult
@@ -1098,8 +1104,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     out = Path(args.out) if args.out else HERE / ("out" if args.quick else "results")
     try:
-        sc = load_scenario(Path(args.scenario), args.quick)
-    except (InputError, KeyError, tomllib.TOMLDecodeError) as exc:
+        sc = load(Path(args.scenario), args.quick)
+    except InputError as exc:
         print(f"run.py: error in {args.scenario}: {exc}", file=sys.stderr)
         return 2
     t0 = time.perf_counter()

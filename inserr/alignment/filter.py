@@ -171,12 +171,12 @@ class Settings:
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.zupt_rate) and self.zupt_rate > 0):
-            raise InputError("--zupt-rate", f"must be > 0 Hz, got {self.zupt_rate!r}")
+            raise InputError("alignment.zupt_rate", f"must be > 0 Hz, got {self.zupt_rate!r}")
         if not (math.isfinite(self.zupt_sigma) and self.zupt_sigma > 0):
-            raise InputError("--zupt-sigma", f"must be > 0 m/s, got {self.zupt_sigma!r}")
+            raise InputError("alignment.zupt_sigma", f"must be > 0 m/s, got {self.zupt_sigma!r}")
         ps = self.position_sigma
         if ps is not None and not (math.isfinite(ps) and ps > 0):
-            raise InputError("--position-sigma", f"must be > 0 m, got {ps!r}")
+            raise InputError("alignment.position_sigma", f"must be > 0 m, got {ps!r}")
 
 
 @dataclass(frozen=True)
@@ -404,7 +404,9 @@ def run_alignment(
 
     n_meas = int(math.floor(timeline.duration * settings.zupt_rate + 1e-9))
     if n_meas < 1:
-        raise InputError("--minutes", "the alignment is shorter than one measurement interval")
+        raise InputError(
+            "scenario.duration", "the alignment is shorter than one measurement interval"
+        )
     t_meas = np.arange(1, n_meas + 1) / settings.zupt_rate
     steps = make_steps(timeline, t_meas, use_omega=True)
     phis = disc.transitions(steps.unique_omega, steps.unique_dt)

@@ -620,7 +620,9 @@ def level_imu(heading: float) -> np.ndarray:
 def _check_headings(headings) -> np.ndarray:
     h = np.atleast_1d(np.asarray(headings, dtype=float))
     if h.ndim != 1 or len(h) == 0 or not np.all(np.isfinite(h)):
-        raise InputError("--headings", "needs one or more finite headings", "e.g. --headings 0,180")
+        raise InputError(
+            "observability.headings", "needs one or more finite headings", "e.g. 0, 180 deg"
+        )
     return h
 
 
@@ -657,7 +659,7 @@ def alignment10(site: Site, headings, dwell: float = 60.0) -> Pwcs:
     """
     h = _check_headings(headings)
     if not (math.isfinite(dwell) and dwell > 0):
-        raise InputError("--dwell", f"must be > 0 s, got {dwell!r}")
+        raise InputError("scheme.stop", f"must be > 0 s, got {dwell!r}")
     core = ErrorModel(site, Layout(bias=True), vertical="clamped")
     names = core.layout.names
     keep = [names.index(s) for s in _ALIGN10_SOURCE]

@@ -829,22 +829,23 @@ class MonteCarloConfig:
     def __post_init__(self) -> None:
         if int(self.runs) != self.runs or self.runs < 2:
             raise InputError(
-                "--runs", f"need at least 2 runs, got {self.runs!r}", "give --runs 2 or more"
+                "scenario.runs", f"need at least 2 runs, got {self.runs!r}", "give 2 or more"
             )
         if int(self.seed) != self.seed or self.seed < 0:
-            raise InputError("--seed", f"seed must be an integer >= 0, got {self.seed!r}")
+            raise InputError("scenario.seed", f"seed must be an integer >= 0, got {self.seed!r}")
         if not math.isfinite(self.positioning_error) or self.positioning_error < 0:
             raise InputError(
-                "--positioning-error", f"must be finite and >= 0, got {self.positioning_error!r}"
+                "calibration.positioning_error",
+                f"must be finite and >= 0, got {self.positioning_error!r}",
             )
         if self.positioning_model not in POSITIONING_MODELS:
             raise InputError(
-                "--positioning-model",
+                "calibration.positioning_model",
                 f"unknown model {self.positioning_model!r}",
                 f"use one of {', '.join(POSITIONING_MODELS)}",
             )
         if not math.isfinite(self.sample_rate) or self.sample_rate <= 0:
-            raise InputError("--sample-rate", f"must be > 0 Hz, got {self.sample_rate!r}")
+            raise InputError("imu.sample_rate", f"must be > 0 Hz, got {self.sample_rate!r}")
 
 
 @dataclass(frozen=True)

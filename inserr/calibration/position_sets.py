@@ -196,7 +196,9 @@ class Candidate:
 def _check_sensors(sensors: str) -> None:
     if sensors not in DESIGN_SENSORS:
         raise InputError(
-            "--design-sensors", f"unknown choice {sensors!r}", f"use one of {DESIGN_SENSORS}"
+            "calibration.design_sensors",
+            f"unknown choice {sensors!r}",
+            f"use one of {DESIGN_SENSORS}",
         )
 
 
@@ -258,13 +260,15 @@ def design_sets(
     # 4 x 4 grid of 90 deg steps and for at most 6 stops (6! orders per subset).
     if not math.isfinite(step) or min(abs(step - 0.5 * math.pi), abs(step - math.pi)) > 1e-9:
         raise InputError(
-            "--design-step", f"{math.degrees(step):g} deg is not supported", "use 90 or 180 deg"
+            "calibration.design_step",
+            f"{math.degrees(step):g} deg is not supported",
+            "use 90 or 180 deg",
         )
     n_grid = round(2.0 * math.pi / step)
     for k in sizes:
         if not 4 <= k <= 6:
             raise InputError(
-                "--design-sizes",
+                "calibration.design_sizes",
                 f"size {k} outside 4..6",
                 "give sizes such as 4,5,6 (12 parameters need at least 4 stops)",
             )

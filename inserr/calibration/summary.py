@@ -102,7 +102,7 @@ SENSITIVITY_AXES: dict[str, str] = {
     "outer_gimbal": "error of the outer gimbal angle (rotation about the outer axis)",
     "inner_gimbal": "error of the inner gimbal angle (rotation about the inner axis at the stop)",
 }
-#: The axes each positioning-error model (``--positioning-model``) perturbs.
+#: The axes each positioning-error model (``calibration.positioning_model``) perturbs.
 MODEL_AXES: dict[str, tuple[str, ...]] = {
     "three-axis": ("east", "north", "up"),
     "gimbal": ("outer_gimbal", "inner_gimbal"),

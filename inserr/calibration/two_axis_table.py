@@ -517,7 +517,7 @@ def builtin_set(
     """
     if name not in BUILTIN_SETS:
         raise InputError(
-            "--method",
+            "calibration.method",
             f"unknown method {name!r}",
             f"use one of {', '.join(BUILTIN_SETS)} or a file",
         )
@@ -645,7 +645,7 @@ def load_position_set(
     path: str | Path,
     default_dwell: float = DEFAULT_DWELL,
     default_rate: float = DEFAULT_RATE,
-    field_name: str = "--method",
+    field_name: str = "calibration.method",
 ) -> PositionSet:
     """Read a custom position set from a TOML file.
 

@@ -5,33 +5,21 @@ from __future__ import annotations
 import argparse
 
 from inserr.cli.common import add_json_flag, emit, format_table
-from inserr.core.errors import InputError
 from inserr.output.progress import progress
-from inserr.scenario.flags import add_scenario_flags, scenario_from_args
+from inserr.scenario.flags import DRIFT, add_flags, scenario_from_args
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    add_scenario_flags(p)
-    p.add_argument(
-        "--schemes",
-        default=None,
-        help="comma-separated scheme names (default: the scenario's [compare] list)",
-    )
+    add_flags(p, "drift", (*DRIFT, "schemes"))
     p.add_argument("--out", default=None, help="write a report directory here")
     add_json_flag(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.drift.study import build_report, metrics_table, run_scheme
+    from inserr.drift.study import build_report, compared_schemes, metrics_table, run_scheme
 
     scen = scenario_from_args(args)
-    names = tuple(s.strip() for s in args.schemes.split(",")) if args.schemes else scen.compare
-    if not names:
-        raise InputError(
-            "--schemes", "no schemes to compare", "give --schemes a,b,c or a [compare] list"
-        )
-    for n in names:
-        scen.scheme(n)  # validate every name before any work
+    names = compared_schemes(scen)
     runs = [run_scheme(scen, n) for n in progress(names, total=len(names), desc="schemes")]
     if args.out:
         build_report(scen, runs, f"inserr scheme comparison: {scen.name}").write(args.out)

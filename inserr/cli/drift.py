@@ -5,11 +5,11 @@ from __future__ import annotations
 import argparse
 
 from inserr.cli.common import add_json_flag, emit, format_table
-from inserr.scenario.flags import add_scenario_flags, scenario_from_args
+from inserr.scenario.flags import DRIFT, add_flags, scenario_from_args
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    add_scenario_flags(p)
+    add_flags(p, "drift", DRIFT)
     p.add_argument("--out", default=None, help="also write a report directory here")
     add_json_flag(p)
 

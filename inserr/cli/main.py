@@ -83,10 +83,13 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, "out", None) is not None and args.command not in _OWN_OUT_CHECK:
             from inserr.output.report import check_report_dir
 
-            check_report_dir(args.out)
+            check_report_dir(args.out, "--out")
         return int(module.run(args) or 0)
     except InputError as exc:
-        print(f"inserr {args.command}: error: {exc}", file=sys.stderr)
+        from inserr.scenario.flags import name_the_flag
+
+        # The library names scenario keys; add the flag where the value came from one.
+        print(f"inserr {args.command}: error: {name_the_flag(exc, args)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         what = (

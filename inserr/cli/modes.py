@@ -5,41 +5,34 @@ from __future__ import annotations
 import argparse
 import math
 
-from inserr.cli.common import add_json_flag, emit, finite_float, format_table
-from inserr.core.earth import Site
-from inserr.model.psi_model import ErrorModel, modes
+from inserr.cli.common import add_json_flag, emit, format_table
+from inserr.scenario.flags import add_flags, scenario_from_args
+
+#: The flags of ``inserr modes``: the site and the vertical channel.
+FLAG_NAMES = ("lat", "height", "earth", "vertical")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--lat", type=finite_float, required=True, help="latitude, deg")
-    p.add_argument("--height", type=finite_float, default=0.0, help="height, m (default 0)")
-    p.add_argument(
-        "--earth",
-        choices=("ellipsoid", "spherical"),
-        default="ellipsoid",
-        help="Earth shape (default WGS84 ellipsoid)",
-    )
-    p.add_argument(
-        "--vertical",
-        choices=("clamped", "free"),
-        default="clamped",
-        help="vertical channel (default clamped)",
-    )
+    add_flags(p, "drift", FLAG_NAMES)
     add_json_flag(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    site = Site.from_degrees(args.lat, height=args.height, spherical=args.earth == "spherical")
-    m = modes(ErrorModel(site, vertical=args.vertical))
+    from inserr.model.psi_model import ErrorModel, modes
+
+    scen = scenario_from_args(args)
+    site, earth = scen.site, scen.value("site.earth")
+    lat_deg = math.degrees(site.lat)
+    m = modes(ErrorModel(site, vertical=scen.vertical))
     result = {
-        "latitude_deg": args.lat,
+        "latitude_deg": lat_deg,
         "schuler_period_min": m.schuler_period_s / 60.0,
         "foucault_period_h": m.foucault_period_s / 3600.0
         if math.isfinite(m.foucault_period_s)
         else None,
         "earth_period_h": m.earth_period_s / 3600.0,
         "eigenvalues_per_s": [[float(e.real), float(e.imag)] for e in m.eigenvalues],
-        "earth_model": args.earth,
+        "earth_model": earth,
         "gravity_m_s2": site.g,
         "vertical_time_constant_s": m.vertical_time_constant_s,
     }
@@ -58,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     emit(
         args,
         result,
-        f"Eigen-periods at latitude {args.lat:g} deg ({args.earth} Earth, g = {site.g:.5f})\n"
+        f"Eigen-periods at latitude {lat_deg:g} deg ({earth} Earth, g = {site.g:.5f})\n"
         + format_table(["mode", "period"], rows),
     )
     return 0

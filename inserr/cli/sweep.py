@@ -1,8 +1,9 @@
 """``inserr sweep``: a Cartesian grid of scenario values, one drift analysis per point, on Dask.
 
 The base scenario is a scenario file and/or the flags of ``inserr drift``;
-``--param NAME=V1,V2,...`` (repeatable) names a flag (``stop``, ``gyro-bias``) or a
-dotted scenario key (``scheme.stop``). The value syntax is in :mod:`inserr.sweep.grid`.
+``--param NAME=V1,V2,...`` (repeatable; or ``sweep.parameters`` in the file) names a
+flag (``stop``, ``gyro-bias``) or a dotted scenario key (``scheme.stop``). The value
+syntax is in :mod:`inserr.sweep.grid`.
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 import argparse
 
 from inserr.cli.common import add_json_flag, emit, format_table, positive_int
-from inserr.scenario.flags import add_scenario_flags, scenario_from_args
+from inserr.scenario.flags import DRIFT, add_flags, scenario_from_args
 
 #: Columns of the terminal table after the parameters (all are in results.csv).
 SHOWN = (
@@ -31,17 +32,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p : argparse.ArgumentParser
         The ``sweep`` sub-command's parser.
     """
-    add_scenario_flags(p)
-    p.add_argument(
-        "--param",
-        action="append",
-        required=True,
-        metavar="NAME=V1,V2,...",
-        help="a swept parameter (repeat for a grid): a flag name of inserr drift (bare numbers "
-        "take its unit: stop=60,300) or a dotted scenario key (values with units: "
-        "'scheme.stop=60 s,5 min'); x,y,z or AMP,PERIOD values in brackets: "
-        "gyro-bias=[0.01,0.02,0.03],0.02",
-    )
+    add_flags(p, "drift", (*DRIFT, "param"))
     p.add_argument(
         "--scheduler",
         default=None,
@@ -90,9 +81,9 @@ def run(args: argparse.Namespace) -> int:
     from inserr.sweep.store import check_sweep_dir
 
     base = scenario_from_args(args)
-    grid = build_grid(base, args.param)
+    grid = build_grid(base)
     out = args.out or default_out_dir(base, getattr(args, "scenario", None))
-    check_sweep_dir(out)
+    check_sweep_dir(out, "--out")
     # Connect (or fail) before the output directory exists.
     engine = open_engine(args.scheduler, args.workers)
     res = run_sweep(grid, out, scheduler=engine, plots=not args.no_plots)

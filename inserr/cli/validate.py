@@ -2,62 +2,33 @@
 
 Same scenario flags as ``inserr drift`` plus the reference's own: ``--runs N``
 (N > 1 adds a Monte Carlo compared with the covariance by a chi-square test),
-``--seed K``, ``--imu-rate HZ`` (default 100 Hz, P0's), ``--chunk H``,
-``--confidence C`` and ``--random-constants``. Needs the optional extra
-``inserr[reference]`` (python-ins).
+``--seed K``, ``--sample-rate HZ`` (the reference's IMU rate, default 100 Hz, P0's),
+``--chunk H``, ``--confidence C`` and ``--random-constants`` (scenario keys
+``scenario.runs``, ``scenario.seed``, ``imu.sample_rate`` and ``[validate]``). Needs
+the optional extra ``inserr[reference]`` (python-ins).
 """
 
 from __future__ import annotations
 
 import argparse
 
-from inserr.cli.common import (
-    add_json_flag,
-    emit,
-    finite_float,
-    format_table,
-    positive_float,
-    positive_int,
+from inserr.cli.common import add_json_flag, emit, format_table
+from inserr.scenario.flags import DRIFT, add_flags, scenario_from_args
+
+#: The flags of ``inserr validate``: the drift scenario and the reference's settings.
+FLAG_NAMES = (
+    *DRIFT,
+    "runs",
+    "seed",
+    "sample-rate",
+    "chunk",
+    "confidence",
+    "random-constants",
 )
-from inserr.scenario.flags import add_scenario_flags, scenario_from_args
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    add_scenario_flags(p)
-    p.add_argument(
-        "--runs",
-        type=positive_int,
-        default=1,
-        help="1: deterministic comparison only (default); N > 1: also N Monte Carlo runs",
-    )
-    p.add_argument(
-        "--seed", type=int, default=None, help="Monte Carlo seed (default: the scenario's, 0)"
-    )
-    p.add_argument(
-        "--imu-rate",
-        type=positive_float,
-        default=100.0,
-        metavar="HZ",
-        help="IMU sample rate of the nonlinear reference, Hz (default 100)",
-    )
-    p.add_argument(
-        "--chunk",
-        type=positive_float,
-        default=1.0,
-        metavar="H",
-        help="reference chunk length, h (bounds memory; default 1)",
-    )
-    p.add_argument(
-        "--confidence",
-        type=finite_float,
-        default=0.99,
-        help="confidence of the two-sided chi-square consistency test (default 0.99)",
-    )
-    p.add_argument(
-        "--random-constants",
-        action="store_true",
-        help="Monte Carlo also draws the constant errors (zero mean, 1 sigma = magnitude)",
-    )
+    add_flags(p, "drift", FLAG_NAMES)
     p.add_argument(
         "--out", default=None, help="also write a report directory with the overlay plots"
     )
@@ -65,21 +36,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.core.units import HOUR
     from inserr.reference.strapdown import require_pyins
-    from inserr.reference.validation import validate
+    from inserr.reference.validation import validate_scenario
 
     scen = scenario_from_args(args)
     require_pyins()
-    v = validate(
-        scen,
-        runs=args.runs,
-        seed=args.seed,
-        rate=args.imu_rate,
-        chunk=args.chunk * HOUR,
-        confidence=args.confidence,
-        random_constants=args.random_constants,
-    )
+    v = validate_scenario(scen)
     if args.out:
         v.report().write(args.out)
     s = v.summary()

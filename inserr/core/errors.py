@@ -17,7 +17,8 @@ class InputError(ValueError):
     Parameters
     ----------
     field : str
-        The flag, scenario key or argument at fault (e.g. ``"--lat"``, ``"imu.gyro_bias"``).
+        The scenario key or argument at fault (e.g. ``"imu.gyro_bias"``); the CLI
+        adds the flag when the value came from one (``"--lat (site.latitude)"``).
     problem : str
         What is wrong with it.
     fix : str, optional
@@ -45,7 +46,7 @@ def require_finite(value: float, field: str) -> float:
     return v
 
 
-def require_latitude(lat_rad: float, field: str = "--lat") -> float:
+def require_latitude(lat_rad: float, field: str = "site.latitude") -> float:
     """Check a latitude in radians is finite and strictly inside (-90 deg, 90 deg).
 
     At the poles the local-level navigation frame has no defined north, the east

@@ -1,7 +1,8 @@
 """Free-inertial drift analysis: deterministic errors, random constants, noise, budget.
 
 :func:`analyze_drift` runs the three computations the ``inserr drift`` command and
-the report need, all on the same :class:`~inserr.model.timeline.Timeline`:
+the report need, all on the same IMU attitude history (a composed schedule or a
+:class:`~inserr.model.timeline.Timeline`):
 
 1. the deterministic response to every constant error with its sign as given
    (one column, fine output grid);
@@ -20,12 +21,21 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from inserr.core.earth import Site
+from inserr.core.errors import InputError
 from inserr.core.imu import ImuErrors, InitialErrors
 from inserr.core.units import NMI
 from inserr.drift.unknown_signs import rms_norm, worst_case_norm
+from inserr.model.attitude_history import AttitudeHistory, TimelineHistory
 from inserr.model.discretization import discretizer_for
-from inserr.model.error_sources import Source, constant_sources, layout_for, source_matrix
+from inserr.model.error_sources import (
+    Source,
+    constant_sources,
+    layout_for,
+    source_matrix,
+    source_set,
+)
 from inserr.model.exact_propagation import Output, propagate_covariance, propagate_outputs
+from inserr.model.fast_propagation import constant_error_response, white_noise_covariance
 from inserr.model.psi_model import DR, ErrorModel, Layout, attitude_error
 from inserr.model.timeline import Timeline
 
@@ -129,67 +139,90 @@ def _noise_runs(imu: ImuErrors) -> dict[str, tuple[float, float, float, float]]:
     return runs
 
 
+ENGINES = ("fast", "exact")
+
+
 def analyze_drift(
     site: Site,
     imu: ImuErrors,
     init: InitialErrors,
-    timeline: Timeline,
+    history: AttitudeHistory | Timeline,
     *,
     dt_out: float = 1.0,
     dt_cov: float = 60.0,
     vertical: str = "clamped",
+    engine: str = "fast",
+    substep: float = 1.0,
 ) -> DriftResult:
-    """Drift of a free-inertial INS over ``timeline`` for the IMU budget ``imu``.
+    """Drift of a free-inertial INS over an IMU attitude history for the IMU budget ``imu``.
 
     Parameters
     ----------
     site : Site
         Location, Earth model and gravity.
     imu : ImuErrors
-        IMU error budget, SI, IMU frame s (resolved in n with ``timeline.c_sn[0]``).
+        IMU error budget, SI, IMU frame s.
     init : InitialErrors
         Initial attitude (rad), velocity (m/s) and position (m) errors, ENU.
-    timeline : Timeline
-        IMU attitude history ``C_s^n(t)`` (from a scheme and a vehicle motion).
+    history : AttitudeHistory or Timeline
+        IMU attitude ``C_s^n(t)``: a composed schedule
+        (:class:`~inserr.schemes.composition.ScheduleHistory`, the exact continuous
+        motion) or a :class:`~inserr.model.timeline.Timeline` (piecewise-constant rates).
     dt_out : float, s
         Output step of the deterministic run.
     dt_cov : float, s
         Output step of the random-constant and covariance results.
     vertical : {"clamped", "free"}
         Vertical-channel mode of :class:`~inserr.model.psi_model.ErrorModel`.
+    engine : {"fast", "exact"}
+        ``"fast"`` (default): :mod:`inserr.model.fast_propagation` (modal, quadrature
+        over smooth windows, white noise in closed form). ``"exact"``: the step-by-step
+        engine :mod:`inserr.model.exact_propagation` on a timeline (a schedule is cut
+        into ``substep`` sub-steps of constant rate first); kept as the reference.
+        Gauss-Markov bias instability always uses the step-by-step covariance.
+    substep : float, s
+        Sub-step of continuous motion when a timeline must be built from a schedule.
 
     Returns
     -------
     DriftResult
         Time histories and :func:`headline` metrics.
     """
-    model = ErrorModel(
-        site,
-        layout_for(imu.without_noise()),
-        vertical=vertical,
-    )
-    disc = discretizer_for(model)
-    c0 = timeline.c_sn[0]
+    if engine not in ENGINES:
+        raise InputError("output.engine", f"unknown engine {engine!r}", "use fast or exact")
+    duration = history.duration
+    t = output_grid(duration, dt_out)
+    t_cov = output_grid(duration, dt_cov)
     sources = constant_sources(imu, init, vertical)
-    cols = source_matrix(model, sources, c0)
-    values = np.array([s.value for s in sources])
+    model = ErrorModel(site, layout_for(imu.without_noise()), vertical=vertical)
 
-    t = output_grid(timeline.duration, dt_out)
-    t_cov = output_grid(timeline.duration, dt_cov)
-    x0 = cols @ values if sources else np.zeros(model.layout.n)
-    # One pass: column 0 is the signed sum (fine grid), the others one source each (coarse).
-    fine, coarse = propagate_outputs(
-        disc,
-        timeline,
-        np.column_stack([x0, cols * values]),
-        [Output(t, slice(0, 9), slice(0, 1)), Output(t_cov, slice(0, 9), slice(1, None))],
-    )
-    nav = fine[..., 0]
+    def timeline() -> Timeline:
+        if isinstance(history, Timeline):
+            return history
+        return history.timeline(substep)
+
+    if engine == "fast":
+        hist = TimelineHistory(history) if isinstance(history, Timeline) else history
+        resp = constant_error_response(model, hist, source_set(model, sources), t, t_cov)
+        nav, coarse = resp.fine, resp.coarse
+    else:
+        tl = timeline()
+        disc = discretizer_for(model)
+        cols = source_matrix(model, sources, tl.c_sn[0])
+        values = np.array([s.value for s in sources])
+        x0 = cols @ values if sources else np.zeros(model.layout.n)
+        # One pass: column 0 is the signed sum (fine grid), the others one source each.
+        fine, coarse = propagate_outputs(
+            disc,
+            tl,
+            np.column_stack([x0, cols * values]),
+            [Output(t, slice(0, 9), slice(0, 1)), Output(t_cov, slice(0, 9), slice(1, None))],
+        )
+        nav = fine[..., 0]
     att = attitude_error(site, nav)
     if sources:
-        resp = coarse  # (Mc, 9, N)
-        src_h = np.moveaxis(resp[:, DR, :][:, :2, :], 1, 2)  # (Mc, N, 2)
-        src_head = attitude_error(site, np.moveaxis(resp, 1, 2))[..., 2]
+        src_h = np.moveaxis(coarse[:, DR, :][:, :2, :], 1, 2)  # (Mc, N, 2)
+        src_head = attitude_error(site, np.moveaxis(coarse, 1, 2))[..., 2]
     else:
         src_h = np.zeros((len(t_cov), 0, 2))
         src_head = np.zeros((len(t_cov), 0))
@@ -203,12 +236,16 @@ def analyze_drift(
             gyro_correlation_time=imu.gyro_correlation_time,
             accel_correlation_time=imu.accel_correlation_time,
         )
+        if engine == "fast" and not nmodel.layout.bias_instability:
+            # White noise is isotropic: its covariance does not depend on the attitude.
+            noise_cov[name] = white_noise_covariance(nmodel, arw, vrw, t_cov)
+            continue
         ndisc = discretizer_for(nmodel, nmodel.noise_intensity(arw, vrw, gbi, abi))
         p0 = np.zeros((nmodel.layout.n,) * 2)
         if nmodel.layout.bias_instability:
             p0[nmodel.layout["bg"], nmodel.layout["bg"]] = gbi**2 * np.eye(3)
             p0[nmodel.layout["ba"], nmodel.layout["ba"]] = abi**2 * np.eye(3)
-        noise_cov[name] = propagate_covariance(ndisc, timeline, p0, t_cov)[:, :9, :9]
+        noise_cov[name] = propagate_covariance(ndisc, timeline(), p0, t_cov)[:, :9, :9]
 
     res = DriftResult(t, nav, att, t_cov, sources, src_h, src_head, noise_cov)
     res.metrics = headline(res)

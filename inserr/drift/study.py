@@ -4,38 +4,65 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 from inserr.core.earth import Site
+from inserr.core.errors import InputError
 from inserr.core.units import ARCSEC, DEG, HOUR, MICRO_G, PPM
 from inserr.drift.analysis import DriftResult, analyze_drift
 from inserr.model.timeline import Timeline
 from inserr.output.report import Report
 from inserr.scenario.schema import Scenario
+from inserr.schemes.composition import ScheduleHistory
+from inserr.schemes.turntable import TableSchedule
 
 
 @dataclass
 class SchemeRun:
-    """One scheme run on a scenario: its timeline and drift result."""
+    """One scheme run on a scenario: its attitude history and drift result.
+
+    Attributes
+    ----------
+    name : str
+        Scheme name.
+    history : ScheduleHistory
+        The table schedule composed with the vehicle motion.
+    result : DriftResult
+    site : Site
+    substep : float, s
+        Sub-step used when a piecewise-constant-rate :attr:`timeline` is asked for.
+    """
 
     name: str
-    timeline: Timeline
+    history: ScheduleHistory
     result: DriftResult
     site: Site
+    substep: float = 1.0
+
+    @cached_property
+    def timeline(self) -> Timeline:
+        """The history as a :class:`~inserr.model.timeline.Timeline` (built on first use)."""
+        return self.history.timeline(self.substep)
+
+    @property
+    def table(self) -> TableSchedule:
+        """The scheme's table schedule."""
+        return self.history.table
 
     @property
     def motor_starts_per_hour(self) -> float:
-        return self.timeline.motor_starts * HOUR / self.timeline.duration
+        return self.table.motor_starts() * HOUR / self.history.duration
 
     def metrics(self) -> dict:
         """Headline metrics plus the scheme name, motor starts per hour and warnings."""
         m = {"scheme": self.name}
         m.update(self.result.metrics)
         m["motor_starts_per_hour"] = self.motor_starts_per_hour
-        table = self.timeline.meta.get("table")
-        if table is not None and "fallbacks" in table.meta:
+        table = self.table
+        if "fallbacks" in table.meta:
             m["fallbacks"] = table.meta["fallbacks"]
         m["warnings"] = []
-        if table is not None and table.cycle:
+        if table.cycle:
             m["cycle_time_s"] = table.cycle
             ratio = table.cycle / self.schuler_period_s
             m["cycle_to_schuler_ratio"] = ratio
@@ -58,17 +85,19 @@ class SchemeRun:
 def run_scheme(scen: Scenario, name: str | None = None) -> SchemeRun:
     """Drift analysis of ``scen`` under its scheme (or ``name``)."""
     name = name or scen.scheme_name
-    tl = scen.timeline(name)
+    hist = scen.history(name)
     res = analyze_drift(
         scen.site,
         scen.imu,
         scen.init,
-        tl,
+        hist,
         dt_out=scen.dt_out,
         dt_cov=scen.dt_cov,
         vertical=scen.vertical,
+        engine=scen.engine,
+        substep=scen.substep,
     )
-    return SchemeRun(name, tl, res, scen.site)
+    return SchemeRun(name, hist, res, scen.site, scen.substep)
 
 
 def describe(scen: Scenario) -> list[tuple[str, str]]:
@@ -177,3 +206,10 @@ def build_report(scen: Scenario, runs: list[SchemeRun], title: str | None = None
         "runs": [r.metrics() for r in runs],
     }
     return rep
+
+
+def compared_schemes(scen: Scenario) -> tuple[str, ...]:
+    """The schemes of ``compare.schemes`` (validated with the scenario), or InputError."""
+    if not scen.compare:
+        raise InputError("compare.schemes", "no schemes to compare", "give a list of schemes")
+    return tuple(scen.compare)

@@ -178,3 +178,49 @@ def source_matrix(model: ErrorModel, sources: list[Source], c_sn0: np.ndarray) -
     if not sources:
         return np.zeros((model.layout.n, 0))
     return np.column_stack([unit_column(model, s, c_sn0) for s in sources])
+
+
+def source_set(model: ErrorModel, sources: list[Source]):
+    """The sources as a :class:`~inserr.model.fast_propagation.SourceSet`.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        Supplies the site (the position-error angle of an initial position error).
+    sources : list of Source
+        Constant error sources with their signed values (SI).
+
+    Returns
+    -------
+    SourceSet
+        IMU errors as (kind, i, j) in the IMU frame; initial errors as navigation states.
+    """
+    from inserr.model.fast_propagation import SourceSet
+
+    n = len(sources)
+    kind = np.full(n, -1)
+    ii = np.zeros(n, dtype=int)
+    jj = np.zeros(n, dtype=int)
+    x0 = np.zeros((9, n))
+    groups = {
+        "gyro_bias": 0,
+        "accel_bias": 1,
+        "gyro_scale_factor": 2,
+        "gyro_misalignment": 2,
+        "accel_scale_factor": 3,
+        "accel_misalignment": 3,
+    }
+    nav_model = ErrorModel(model.site, Layout(bias=False), vertical=model.vertical)
+    for s, src in enumerate(sources):
+        lab = src.name.rsplit("_", 1)[1]
+        if src.group in groups:
+            kind[s] = groups[src.group]
+            if src.group.endswith("bias"):
+                ii[s] = AXES.index(lab)
+            elif src.group.endswith("scale_factor"):
+                ii[s] = jj[s] = AXES.index(lab)
+            else:
+                ii[s], jj[s] = MISALIGNMENT_INDEX[lab]
+        else:
+            x0[:, s] = unit_column(nav_model, src, np.eye(3))[:9]
+    return SourceSet(kind, ii, jj, x0, np.array([s.value for s in sources], dtype=float))

@@ -329,7 +329,7 @@ def diagnose(
             f"{EQUATORIAL_BAND * deg:.2f} deg, where Omega sin E, which carries the latitude "
             f"and the choice of root, is below {OBSERVABILITY_FRACTION:g} Omega): the "
             f"latitude bound grows as 1/|sin E| (here {sigma_lat * deg:.3g} deg); give the "
-            "latitude (--latitude-known) if it is known"
+            "latitude (northfinder.latitude_known) if it is known"
         )
     if unresolved:
         out.append(
@@ -338,7 +338,7 @@ def diagnose(
             f"({RESOLVED_IN_BOUNDS * sigma_lat * deg:.3g} deg), so the data cannot tell on "
             "which side of the plane it lies; the declared hemisphere then clips the "
             "root in many runs, the estimator is biased and the unbiased Cramér-Rao bound "
-            "does not describe it. Give the latitude (--latitude-known), level the table "
+            "does not describe it. Give the latitude (northfinder.latitude_known), level the table "
             "or measure longer"
         )
     if unknown:
@@ -419,7 +419,7 @@ def diagnose(
             if abs(ratio - 1.0) < 3.0 * spread:
                 causes.append(
                     f"sampling spread: with {n} runs sigma is known to +-{100 * spread:.0f} % "
-                    "(1 sigma); use more --runs"
+                    "(1 sigma); use more runs (scenario.runs)"
                 )
             if not causes:
                 causes.append("none of the modelled ones; investigate")

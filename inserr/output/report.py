@@ -261,7 +261,7 @@ def check_output_dir(
         raise InputError(
             field,
             f"{out_dir!s} is the working directory or one of its parents",
-            "name a new directory, e.g. --out my_report",
+            "name a new directory, e.g. my_report",
         )
     if target.exists() and not target.is_dir():
         raise InputError(field, f"{out_dir!s} exists and is not a directory", "name a directory")
@@ -281,7 +281,7 @@ def check_output_dir(
     return target
 
 
-def check_report_dir(out_dir: str | os.PathLike, field: str = "--out") -> Path:
+def check_report_dir(out_dir: str | os.PathLike, field: str = "out") -> Path:
     """Check, before any work, that a report can be written to ``out_dir``.
 
     :meth:`Report.write` replaces the target directory as a whole, so it must be

@@ -371,11 +371,11 @@ def simulate(
     import pandas as pd
 
     if not (math.isfinite(rate) and rate > 0):
-        raise InputError("--imu-rate", f"must be > 0 Hz, got {rate!r}", "give e.g. 100")
+        raise InputError("imu.sample_rate", f"must be > 0 Hz, got {rate!r}", "give e.g. 100 Hz")
     if not (math.isfinite(chunk) and chunk > 0):
-        raise InputError("chunk", f"must be > 0 s, got {chunk!r}")
+        raise InputError("validate.chunk", f"must be > 0 s, got {chunk!r}")
     if vertical not in ("clamped", "free"):
-        raise InputError("vertical", f"unknown mode {vertical!r}", "use clamped or free")
+        raise InputError("output.vertical", f"unknown mode {vertical!r}", "use clamped or free")
     dt = 1.0 / rate
     n = int(math.floor(duration * rate + 1e-9))
     if n < 2:

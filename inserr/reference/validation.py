@@ -164,10 +164,12 @@ def chi2_consistency(
     n, d = x.shape
     if n < 2:
         raise InputError(
-            "--runs", f"the consistency test needs at least 2 runs, got {n}", "give --runs 20"
+            "scenario.runs", f"the consistency test needs at least 2 runs, got {n}", "give e.g. 20"
         )
     if not 0.0 < confidence < 1.0:
-        raise InputError("--confidence", f"must be in (0, 1), got {confidence!r}", "give e.g. 0.99")
+        raise InputError(
+            "validate.confidence", f"must be in (0, 1), got {confidence!r}", "give e.g. 0.99"
+        )
     dev = x - x.mean(axis=0)
     q = float(np.einsum("ni,ij,nj->", dev, np.linalg.inv(cov), dev))
     dof = d * (n - 1)
@@ -361,14 +363,14 @@ def validate(
 
     require_pyins()  # fail before the linear work when the extra is missing
     if runs < 1:
-        raise InputError("--runs", f"must be >= 1, got {runs}")
+        raise InputError("scenario.runs", f"must be >= 1, got {runs}")
     seed = scen.seed if seed is None else int(seed)
     noisy = scen.imu.arw > 0 or scen.imu.vrw > 0 or scen.imu.has_bias_instability
     if runs > 1 and not (noisy or random_constants):
         raise InputError(
-            "--runs",
+            "scenario.runs",
             "a Monte Carlo needs a random error, but the budget has no noise or bias instability",
-            "add --arw/--vrw/--gyro-bias-instability, or --random-constants",
+            "give imu.arw, imu.vrw or a bias instability, or set validate.random_constants",
         )
     notes = []
     if scen.site.spherical:
@@ -407,3 +409,29 @@ def validate(
             test = chi2_consistency(samples[:, -1, :], cov[-1], confidence)
         mc = MonteCarlo(histories[1:], t, samples, cov, test, random_constants)
     return Validation(scen, lin_run.name, lin, det, compare(lin, det), mc, rate, seed, notes)
+
+
+def validate_scenario(scen) -> Validation:
+    """:func:`validate` with its settings read from the scenario.
+
+    Reads ``scenario.runs``, ``scenario.seed``, ``imu.sample_rate`` (the reference's
+    IMU rate), ``validate.chunk``, ``validate.confidence`` and
+    ``validate.random_constants``; the scheme is the scenario's.
+
+    Parameters
+    ----------
+    scen : Scenario
+
+    Returns
+    -------
+    Validation
+    """
+    return validate(
+        scen,
+        runs=scen.value("scenario.runs"),
+        seed=scen.seed,
+        rate=scen.value("imu.sample_rate"),
+        chunk=scen.value("validate.chunk"),
+        confidence=scen.value("validate.confidence"),
+        random_constants=scen.value("validate.random_constants"),
+    )

@@ -1,104 +1,368 @@
-"""The scenario flags shared by ``drift``, ``compare``, ``validate``, ``align`` and ``sweep``.
+"""The flag table of the ``inserr`` command: every value flag overrides one scenario key.
 
-Each flag maps to one dotted scenario key and has a documented unit; values may
-also carry an explicit unit (``--gyro-bias "0.02 deg/h"``). The flags are turned
-into the same nested table a scenario file gives, so both are validated by
-:func:`inserr.scenario.schema.scenario_from_dict`.
+One table (:data:`FLAGS`) for all sub-commands: each flag has one name, one scenario
+key, one unit for bare numbers (written one way: ``ug``, ``deg/h``, ``deg/sqrt(h)``,
+``ug/sqrt(Hz)``, ``arcsec``, ``ppm``, ``deg``, ``s``, ``min``, ``h``, ``Hz``), one
+help text and one default, the scenario's (:func:`inserr.scenario.schema.study_default`:
+a study's own default where it has one). A sub-command picks the flags it offers
+from the table (:func:`add_flags`); the flags it was given become a nested scenario
+table (:func:`flags_to_dict`) laid over its optional scenario file, and the result
+is validated by :func:`inserr.scenario.schema.scenario_from_dict` like any file.
+Values may carry an explicit unit (``--gyro-bias "0.02 deg/h"``).
+
+Library code names scenario keys in its errors; :func:`name_the_flag` adds the flag
+when the value came from one (``--arw (imu.arw): ...``).
 """
 
 from __future__ import annotations
 
 import argparse
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
 
 from inserr.core.errors import InputError
-from inserr.scenario.schema import Scenario, load_scenario, scenario_from_dict
+from inserr.core.units import UNITS
+from inserr.scenario.schema import (
+    CHOICES,
+    SCHEMA,
+    Key,
+    Scenario,
+    read_scenario_file,
+    scenario_from_dict,
+    study_default,
+)
 
-#: flag name (without --) -> (dotted scenario key, unit appended to bare numbers, help)
-FLAGS: dict[str, tuple[str, str | None, str]] = {
-    "lat": ("site.latitude", "deg", "latitude, deg (default 34)"),
-    "lon": ("site.longitude", "deg", "longitude, deg"),
-    "height": ("site.height", "m", "height above the ellipsoid, m"),
-    "hours": ("scenario.duration", "h", "duration, h (default 72)"),
-    "gyro-bias": ("imu.gyro_bias", "deg/h", "gyro bias, deg/h: one value or x,y,z"),
-    "accel-bias": ("imu.accel_bias", "ug", "accelerometer bias, micro-g: one value or x,y,z"),
-    "gyro-sf": ("imu.gyro_scale_factor", "ppm", "gyro scale-factor error, ppm: one value or x,y,z"),
-    "accel-sf": ("imu.accel_scale_factor", "ppm", "accelerometer scale-factor error, ppm"),
-    "gyro-misalignment": (
-        "imu.gyro_misalignment",
-        "arcsec",
-        "gyro misalignment, arcsec (all six, or xy,xz,yx,yz,zx,zy)",
+
+@dataclass(frozen=True)
+class Flag:
+    """One value flag.
+
+    Attributes
+    ----------
+    key : str or tuple of str
+        The scenario key it overrides (``--yaw-swing AMP,PERIOD`` sets two).
+    unit : str or None
+        Unit of bare numbers; None for words, counts and plain numbers, and for a
+        quantity whose natural unit differs between studies (``--duration``), which
+        must then be written with its unit.
+    help : str
+        What it is, without unit or default (both are added from the table: the unit
+        after the first words, before a ``": "`` that introduces the value's form).
+    metavar : str
+        Placeholder of the value in ``--help``.
+    """
+
+    key: str | tuple[str, ...]
+    unit: str | None
+    help: str
+    metavar: str = "X"
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """Every scenario key the flag sets."""
+        return (self.key,) if isinstance(self.key, str) else tuple(self.key)
+
+    @property
+    def spec(self) -> Key:
+        """The schema entry of its (first) key."""
+        section, _, name = self.keys[0].partition(".")
+        return SCHEMA[section][name]
+
+
+_F = Flag
+
+#: flag name (without --) -> :class:`Flag`. Grouped as the scenario sections are.
+FLAGS: dict[str, Flag] = {
+    # [scenario]
+    "duration": _F("scenario.duration", None, "duration of the run (of each run in a study)"),
+    "seed": _F("scenario.seed", None, "seed of the random draws", "N"),
+    "runs": _F("scenario.runs", None, "Monte Carlo runs", "N"),
+    # [site]
+    "lat": _F("site.latitude", "deg", "latitude"),
+    "lon": _F("site.longitude", "deg", "longitude"),
+    "height": _F("site.height", "m", "height above the ellipsoid"),
+    "earth": _F("site.earth", None, "Earth shape"),
+    # [imu]
+    "gyro-bias": _F("imu.gyro_bias", "deg/h", "gyro bias: one value or x,y,z"),
+    "accel-bias": _F("imu.accel_bias", "ug", "accelerometer bias: one value or x,y,z"),
+    "gyro-sf": _F("imu.gyro_scale_factor", "ppm", "gyro scale-factor error: one value or x,y,z"),
+    "accel-sf": _F(
+        "imu.accel_scale_factor", "ppm", "accelerometer scale-factor error: one value or x,y,z"
     ),
-    "accel-misalignment": (
+    "gyro-misalignment": _F(
+        "imu.gyro_misalignment", "arcsec", "gyro misalignment: one value or xy,xz,yx,yz,zx,zy"
+    ),
+    "accel-misalignment": _F(
         "imu.accel_misalignment",
         "arcsec",
-        "accelerometer misalignment, arcsec",
+        "accelerometer misalignment: one value or xy,xz,yx,yz,zx,zy",
     ),
-    "arw": ("imu.arw", "deg/sqrt(h)", "angle random walk, deg/sqrt(h)"),
-    "vrw": ("imu.vrw", "ug/sqrt(Hz)", "velocity random walk, micro-g/sqrt(Hz)"),
-    "gyro-bias-instability": (
-        "imu.gyro_bias_instability",
-        "deg/h",
-        "Gauss-Markov gyro bias 1 sigma, deg/h",
+    "arw": _F("imu.arw", "deg/sqrt(h)", "gyro angle random walk"),
+    "vrw": _F("imu.vrw", "ug/sqrt(Hz)", "accelerometer velocity random walk"),
+    "gyro-bias-instability": _F(
+        "imu.gyro_bias_instability", "deg/h", "Gauss-Markov gyro bias, 1 sigma"
     ),
-    "accel-bias-instability": (
-        "imu.accel_bias_instability",
-        "ug",
-        "Gauss-Markov accel bias 1 sigma, micro-g",
+    "accel-bias-instability": _F(
+        "imu.accel_bias_instability", "ug", "Gauss-Markov accelerometer bias, 1 sigma"
     ),
-    "correlation-time": (
-        "imu.gyro_correlation_time",
+    "gyro-correlation-time": _F(
+        "imu.gyro_correlation_time", "s", "correlation time of the Gauss-Markov gyro bias"
+    ),
+    "accel-correlation-time": _F(
+        "imu.accel_correlation_time",
         "s",
-        "Gauss-Markov correlation time, s (gyro and accel)",
+        "correlation time of the Gauss-Markov accelerometer bias",
     ),
-    "initial-attitude": (
+    "sample-rate": _F("imu.sample_rate", "Hz", "IMU sample rate of simulated data"),
+    # [initial]
+    "initial-attitude": _F(
         "initial.attitude",
         "arcsec",
-        "initial attitude error E,N,U (tilts, heading), arcsec",
+        "initial attitude error: E,N,U (tilts, heading); align: also the prior 1 sigma",
     ),
-    "initial-velocity": ("initial.velocity", "m/s", "initial velocity error, m/s"),
-    "initial-position": ("initial.position", "m", "initial position error, m"),
-    "heading": ("motion.heading", "deg", "vehicle heading, deg (clockwise from north)"),
-    "pitch": ("motion.pitch", "deg", "vehicle pitch, deg"),
-    "roll": ("motion.roll", "deg", "vehicle roll, deg"),
-    "turn-rate": ("motion.rate", "deg/s", "constant heading rate (turn on the spot), deg/s"),
-    "scheme": ("scheme.name", None, "indexing scheme (default none)"),
-    "rate": ("scheme.rate", "deg/s", "table rate, deg/s (default 6)"),
-    "stop": ("scheme.stop", "s", "stop time, s (default 300)"),
-    "reversal": ("scheme.reversal", "s", "continuous scheme: reversal period, s (0 = none)"),
-    "delta": ("scheme.delta", None, "flexible scheme: stop threshold (default 0.01)"),
-    "variant": ("scheme.variant", None, "flexible scheme: threshold or crossing"),
-    "step": ("output.step", "s", "output step of the deterministic run, s (default 1)"),
-    "covariance-step": (
-        "output.covariance_step",
-        "s",
-        "output step of covariance results, s (default 60)",
+    "initial-velocity": _F("initial.velocity", "m/s", "initial velocity error: one value or E,N,U"),
+    "initial-position": _F("initial.position", "m", "initial position error: one value or E,N,U"),
+    # [motion]
+    "heading": _F("motion.heading", "deg", "vehicle heading, clockwise from north"),
+    "pitch": _F("motion.pitch", "deg", "vehicle pitch"),
+    "roll": _F("motion.roll", "deg", "vehicle roll"),
+    "turn-rate": _F("motion.rate", "deg/s", "turn on the spot at this constant heading rate"),
+    "yaw-swing": _F(
+        ("motion.amplitude", "motion.period"),
+        "deg/s,s",
+        "swinging base: heading rate AMP cos(2 pi t / PERIOD), AMP in deg/s, PERIOD in s",
+        "AMP,PERIOD",
     ),
-    "substep": ("output.substep", "s", "sub-step of continuous motion, s (default 1)"),
-    "vertical": ("output.vertical", None, "vertical channel: clamped (default) or free"),
+    # [scheme], [compare]
+    "scheme": _F("scheme.name", None, "indexing scheme", "NAME"),
+    "schemes": _F("compare.schemes", None, "schemes to run side by side, comma-separated", "A,B"),
+    "rate": _F("scheme.rate", "deg/s", "table rate"),
+    "stop": _F("scheme.stop", "s", "stop (dwell) time at each position"),
+    "reversal": _F("scheme.reversal", "s", "reversal period of the continuous scheme (0 = never)"),
+    "delta": _F("scheme.delta", None, "stop threshold of the flexible scheme"),
+    "variant": _F("scheme.variant", None, "variant of the flexible scheme"),
+    # [output]
+    "step": _F("output.step", "s", "output step of the deterministic run"),
+    "covariance-step": _F("output.covariance_step", "s", "output step of covariance results"),
+    "substep": _F("output.substep", "s", "sub-step of continuous motion"),
+    "vertical": _F("output.vertical", None, "vertical channel"),
+    "engine": _F("output.engine", None, "drift engine: fast, or exact (step by step, reference)"),
+    # [alignment]
+    "zupt-rate": _F("alignment.zupt_rate", "Hz", "zero-velocity update rate"),
+    "zupt-sigma": _F("alignment.zupt_sigma", "m/s", "zero-velocity measurement 1 sigma"),
+    "position-sigma": _F(
+        "alignment.position_sigma", "m", "position updates at the update rate with this 1 sigma"
+    ),
+    # [observability]
+    "headings": _F(
+        "observability.headings",
+        "deg",
+        "IMU headings: comma-separated, one stop each instead of a scheme",
+        "H1,H2",
+    ),
+    "model": _F(
+        "observability.model",
+        None,
+        "observability model (auto = alignment10 with headings, full with a scheme)",
+    ),
+    "position-updates": _F(
+        "observability.position_updates", None, "position measurements too (full model)"
+    ),
+    # [calibration]
+    "method": _F(
+        "calibration.method",
+        None,
+        "position set: offaxis-four-position, six-position or a .toml position-set file",
+        "SET",
+    ),
+    "settle": _F("calibration.settle", "s", "settling time after every move"),
+    "positioning-error": _F(
+        "calibration.positioning_error",
+        "arcsec",
+        "half-width of the uniform positioning error at every stop",
+    ),
+    "positioning-model": _F(
+        "calibration.positioning_model",
+        None,
+        "positioning error: about east, north and up (three-axis) or of the two gimbal angles",
+    ),
+    "per-sample": _F(
+        "calibration.per_sample",
+        None,
+        "simulate every sample and average (default: draw the exact dwell average)",
+    ),
+    "design": _F(
+        "calibration.design", None, "rank candidate position sets instead of a Monte Carlo"
+    ),
+    "design-sizes": _F(
+        "calibration.design_sizes", None, "numbers of positions to try, comma-separated", "N,M"
+    ),
+    "design-sensors": _F("calibration.design_sensors", None, "what must be identifiable"),
+    "design-step": _F("calibration.design_step", "deg", "gimbal step of the candidate sets"),
+    "top": _F("calibration.top", None, "candidate sets shown", "N"),
+    # [northfinder]
+    "filter-period": _F("northfinder.filter_period", "s", "Kalman filter period"),
+    "gyro-tilt": _F("northfinder.gyro_tilt", "deg", "gyro tilt toward the rotation axis"),
+    "accel-azimuth": _F(
+        "northfinder.accel_azimuth", "deg", "accelerometer azimuth from the gyro axis"
+    ),
+    "accel-tilt": _F(
+        "northfinder.accel_tilt", "deg", "accelerometer tilt toward the rotation axis"
+    ),
+    "latitude-known": _F(
+        "northfinder.latitude_known",
+        None,
+        "give the estimator the true latitude (the hemisphere is then not used)",
+    ),
+    "hemisphere": _F(
+        "northfinder.hemisphere",
+        None,
+        "hemisphere declared to the estimator (never taken from the true latitude)",
+    ),
+    # [validate]
+    "chunk": _F("validate.chunk", "h", "chunk length of the nonlinear reference (bounds memory)"),
+    "confidence": _F(
+        "validate.confidence", None, "confidence of the two-sided chi-square consistency test"
+    ),
+    "random-constants": _F(
+        "validate.random_constants",
+        None,
+        "the Monte Carlo also draws the constant errors (zero mean, 1 sigma = magnitude)",
+    ),
+    # [sweep]
+    "param": _F(
+        "sweep.parameters",
+        None,
+        "a swept parameter (repeat for a grid): a flag name (bare numbers take its unit: "
+        "stop=60,300) or a dotted scenario key (values with units: 'scheme.stop=60 s,5 min'); "
+        "x,y,z or AMP,PERIOD values in brackets: gyro-bias=[0.01,0.02,0.03],0.02",
+        "NAME=V1,V2,...",
+    ),
 }
 
-#: Flags whose value is a pair handled specially.
-YAW_SWING = "yaw-swing"
+#: Flags that say how or where to run, not what: they override no scenario key.
+CONTROLS: dict[str, str] = {
+    "out": "output directory",
+    "json": "print JSON on stdout",
+    "scheduler": "Dask scheduler of a sweep",
+    "workers": "local worker processes of a sweep",
+    "no-plots": "no summary plots for a sweep",
+}
+
+#: Flags that repeat (each occurrence adds one list item).
+REPEATED = frozenset({"param"})
+
+# --- the flag groups the sub-commands offer ----------------------------------------------
+SITE = ("lat", "lon", "height", "earth")
+IMU_FLAGS = (
+    "gyro-bias",
+    "accel-bias",
+    "gyro-sf",
+    "accel-sf",
+    "gyro-misalignment",
+    "accel-misalignment",
+    "arw",
+    "vrw",
+    "gyro-bias-instability",
+    "accel-bias-instability",
+    "gyro-correlation-time",
+    "accel-correlation-time",
+)
+INITIAL = ("initial-attitude", "initial-velocity", "initial-position")
+MOTION = ("heading", "pitch", "roll", "turn-rate", "yaw-swing")
+SCHEME = ("scheme", "rate", "stop", "reversal", "delta", "variant")
+OUTPUT = ("step", "covariance-step", "substep", "vertical", "engine")
+#: The scenario flags of ``drift`` (and ``compare``, ``validate``, ``sweep``).
+DRIFT = ("duration", *SITE, *IMU_FLAGS, *INITIAL, *MOTION, *SCHEME, *OUTPUT)
 
 
-def add_scenario_flags(parser: argparse.ArgumentParser, scenario_file: bool = True) -> None:
-    """Add the scenario flags (all optional) and, if asked, a positional scenario file."""
+def dest(name: str) -> str:
+    """argparse destination of a flag (``gyro-bias`` -> ``gyro_bias``)."""
+    return name.replace("-", "_")
+
+
+def default_text(name: str, study: str = "drift") -> str | None:
+    """The default of a flag as its help shows it (None: a switch that is off).
+
+    Bare numbers when the default is written in the flag's unit (``0.003`` for
+    ``--gyro-bias`` under ``align``), else the scenario value as written (``10 min``).
+    """
+    flag = FLAGS[name]
+    if name == "yaw-swing":
+        return None  # no swing unless asked (motion.type static)
+    value = study_default(flag.keys[0], study)
+    if isinstance(value, bool):
+        return None if not value else "on"
+    if value == []:
+        return None  # an empty list: nothing is added
+    if value is None:
+        return "none"
+    if isinstance(value, list):
+        return ",".join(str(v) for v in value)
+    if isinstance(value, str) and flag.unit and value.endswith(f" {flag.unit}"):
+        return value[: -len(flag.unit) - 1].replace(" ", "")
+    return str(value)
+
+
+def help_text(name: str, study: str = "drift") -> str:
+    """The ``--help`` line of a flag: what, unit, choices and the study's default."""
+    flag = FLAGS[name]
+    spec = flag.spec
+    what, colon, form = flag.help.partition(": ")
+    if flag.unit and name != "yaw-swing":
+        what += f", {flag.unit}"
+    elif spec.kind in UNITS and name != "yaw-swing":
+        what += ", with its unit (e.g. 72h, 10min, 180s)"
+    text = what + colon + form
+    choices = CHOICES.get(flag.keys[0])
+    if choices:
+        text += f": {' | '.join(choices)}"
+    default = default_text(name, study)
+    if default is not None:
+        text += f" (default {default})"
+    return text
+
+
+def add_flags(
+    parser: argparse.ArgumentParser,
+    study: str,
+    names: Iterable[str],
+    *,
+    scenario_file: bool = True,
+) -> None:
+    """Add the flags ``names`` of :data:`FLAGS` (all optional) and a positional scenario file.
+
+    Every flag's argparse default is None (a switch's too), so that what the user gave
+    is known and an absent flag leaves the scenario's value (file or default) alone.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+    study : str
+        Whose defaults the help shows (a key of
+        :data:`inserr.scenario.schema.STUDY_DEFAULTS`).
+    names : iterable of str
+        Flag names without dashes.
+    scenario_file : bool
+        Add the optional positional ``scenario`` (a TOML file the flags override).
+    """
     if scenario_file:
         parser.add_argument("scenario", nargs="?", help="scenario TOML file (flags override it)")
-    for name, (_, _, help_) in FLAGS.items():
-        parser.add_argument(
-            f"--{name}", dest=name.replace("-", "_"), default=None, metavar="X", help=help_
-        )
-    parser.add_argument(
-        f"--{YAW_SWING}",
-        dest="yaw_swing",
-        default=None,
-        metavar="AMP,PERIOD",
-        help="yaw swing: peak rate deg/s, period s (heading rate AMP cos(2 pi t / PERIOD))",
-    )
+    for name in names:
+        flag = FLAGS[name]
+        kw: dict[str, Any] = {"dest": dest(name), "default": None, "help": help_text(name, study)}
+        if flag.spec.kind == "bool":
+            kw["action"] = "store_true"
+        else:
+            choices = CHOICES.get(flag.keys[0])
+            kw["metavar"] = "{" + ",".join(choices) + "}" if choices else flag.metavar
+            if name in REPEATED:
+                kw["action"] = "append"
+        parser.add_argument(f"--{name}", **kw)
 
 
-def _with_unit(flag: str, text: str, unit: str | None) -> str:
+def _with_unit(text: str, unit: str | None) -> str:
     """Append the flag's unit to bare numbers (``"0.02"``, ``"1,2,3"``, ``"nan"``)."""
     text = text.strip()
     if unit is None:
@@ -110,38 +374,67 @@ def _with_unit(flag: str, text: str, unit: str | None) -> str:
     return f"{text} {unit}"
 
 
-def flags_to_dict(args: argparse.Namespace) -> dict:
-    """Nested scenario table of the flags that were given."""
-    d: dict[str, dict] = {}
-    for name, (key, unit, _) in FLAGS.items():
-        value = getattr(args, name.replace("-", "_"), None)
-        if value is None:
-            continue
-        section, _, k = key.partition(".")
-        if key in ("scheme.delta",):
-            try:
-                d.setdefault(section, {})[k] = float(value)
-            except ValueError:
-                raise InputError(f"--{name}", f"{value!r} is not a number") from None
-            continue
-        d.setdefault(section, {})[k] = _with_unit(name, value, unit)
-        if name == "correlation-time":
-            d["imu"]["accel_correlation_time"] = d["imu"][k]
-    if getattr(args, "turn_rate", None) is not None:
-        d.setdefault("motion", {})["type"] = "turn"
-    swing = getattr(args, "yaw_swing", None)
-    if swing is not None:
-        parts = swing.split(",")
-        if len(parts) != 2:
+def _split(text: str) -> list[str]:
+    return [s.strip() for s in str(text).split(",") if s.strip()]
+
+
+def _flag_value(name: str, value: Any) -> Any:
+    """A flag's text as the scenario file would hold the value of its key."""
+    flag = FLAGS[name]
+    key, kind = flag.keys[0], flag.spec.kind
+    where = f"--{name} ({key})"
+    if kind == "bool":
+        return bool(value)
+    if kind == "int":
+        try:
+            return int(str(value).strip())
+        except ValueError:
+            raise InputError(where, f"{value!r} is not an integer", "give a whole number") from None
+    if kind == "float":
+        try:
+            return float(str(value).strip())
+        except ValueError:
+            raise InputError(where, f"{value!r} is not a number") from None
+    if kind == "list":
+        return list(value) if name in REPEATED else _split(value)
+    if kind == "int-list":
+        try:
+            return [int(v) for v in _split(value)]
+        except ValueError:
             raise InputError(
-                "--yaw-swing", f"expected AMP,PERIOD, got {swing!r}", "e.g. --yaw-swing 6,120"
-            )
-        m = d.setdefault("motion", {})
-        if m.get("type") == "turn":
-            raise InputError("--yaw-swing", "cannot be combined with --turn-rate")
-        m["type"] = "yaw-swing"
-        m["amplitude"] = _with_unit("yaw-swing", parts[0], "deg/s")
-        m["period"] = _with_unit("yaw-swing", parts[1], "s")
+                where, f"cannot read {value!r}", "give whole numbers, e.g. 4,5,6"
+            ) from None
+    if kind == "str":
+        return str(value).strip()
+    return _with_unit(str(value), flag.unit)
+
+
+def flags_to_dict(args: argparse.Namespace, names: Iterable[str] | None = None) -> dict:
+    """Nested scenario table of the flags that were given (of ``names``, default all)."""
+    d: dict[str, dict] = {}
+    for name in FLAGS if names is None else names:
+        value = getattr(args, dest(name), None)
+        if value is None or value is False:
+            continue
+        if name == "yaw-swing":
+            parts = str(value).split(",")
+            if len(parts) != 2:
+                raise InputError(
+                    "--yaw-swing", f"expected AMP,PERIOD, got {value!r}", "e.g. --yaw-swing 6,120"
+                )
+            m = d.setdefault("motion", {})
+            if m.get("type") == "turn":
+                raise InputError("--yaw-swing", "cannot be combined with --turn-rate")
+            m["type"] = "yaw-swing"
+            m["amplitude"] = _with_unit(parts[0], "deg/s")
+            m["period"] = _with_unit(parts[1], "s")
+            continue
+        section, _, key = FLAGS[name].keys[0].partition(".")
+        d.setdefault(section, {})[key] = _flag_value(name, value)
+        if name == "turn-rate":
+            if d["motion"].get("type") == "yaw-swing":
+                raise InputError("--yaw-swing", "cannot be combined with --turn-rate")
+            d["motion"]["type"] = "turn"
     return d
 
 
@@ -153,22 +446,50 @@ def merge(base: dict, over: dict) -> dict:
     return out
 
 
-def scenario_from_args(args: argparse.Namespace) -> Scenario:
-    """Scenario from the optional file argument overlaid with the flags."""
+def scenario_from_args(args: argparse.Namespace, study: str = "drift") -> Scenario:
+    """Scenario of the optional file argument overlaid with the flags, for ``study``.
+
+    The file is read, the flags laid over it, and the result validated once, so a
+    flag may repair a value the file gets wrong. Errors name scenario keys;
+    :func:`name_the_flag` adds the flag where the value came from one.
+    """
     over = flags_to_dict(args)
     path = getattr(args, "scenario", None)
-    base = load_scenario(path) if path else None
-    try:
-        if base is None:
-            return scenario_from_dict(over)
-        return scenario_from_dict(merge(base.raw, over), base.base_dir) if over else base
-    except InputError as exc:
-        # Name the flag the user typed, not the scenario key it was translated to.
-        given = {
-            key: f"--{name}"
-            for name, (key, _, _) in FLAGS.items()
-            if getattr(args, name.replace("-", "_"), None) is not None
-        }
-        if exc.field in given:
-            raise InputError(f"{given[exc.field]} ({exc.field})", exc.problem, exc.fix) from None
-        raise
+    if not path:
+        return scenario_from_dict(over, study=study)
+    data, base_dir = read_scenario_file(path)
+    return scenario_from_dict(merge(data, over), base_dir, study=study)
+
+
+def given_flags(args: argparse.Namespace) -> dict[str, str]:
+    """Scenario key -> the flag (``--lat``) that set it, for the flags given in ``args``."""
+    out: dict[str, str] = {}
+    for name, flag in FLAGS.items():
+        value = getattr(args, dest(name), None)
+        if value is None or value is False:
+            continue
+        keys = flag.keys
+        if name in ("yaw-swing", "turn-rate"):
+            keys += ("motion.type",)
+        for key in keys:
+            out[key] = f"--{name}"
+    return out
+
+
+def name_the_flag(exc: InputError, args: argparse.Namespace) -> InputError:
+    """``exc`` with the flag added to its field when the value came from a flag.
+
+    ``imu.arw: ...`` becomes ``--arw (imu.arw): ...`` if ``--arw`` was given, and
+    ``sweep.parameters[stop]: ...`` becomes ``--param (sweep.parameters[stop]): ...``;
+    an error about a value from the scenario file (or a default) is left as it is.
+    """
+    field = exc.field
+    for key, flag in given_flags(args).items():
+        if field == key or field.startswith(key + "["):
+            return InputError(f"{flag} ({field})", exc.problem, exc.fix)
+    # Run controls (sweep's scheduler and workers) have no scenario key: the library
+    # names its argument, which is the flag's name.
+    name = field.replace("_", "-")
+    if name in CONTROLS and getattr(args, dest(name), None) is not None:
+        return InputError(f"--{name}", exc.problem, exc.fix)
+    return exc

@@ -1,11 +1,20 @@
 """Scenario files (TOML with explicit units) and the one validation path for all inputs.
 
-A scenario is a nested table of sections (``scenario``, ``site``, ``imu``,
-``initial``, ``motion``, ``scheme``, ``output``, ``compare``). Physical values are
-strings carrying their unit (``gyro_bias = "0.02 deg/h"``, ``"0.01,0.02,0.03 deg/h"``
-for the three IMU axes). CLI flags are translated into the same nested table (with
-their documented units) and go through :func:`scenario_from_dict` too, so a flag
-and a scenario key are validated by the same code. Reference: ``docs/scenarios.md``.
+A scenario is a nested table of sections. The drift engine reads ``scenario``,
+``site``, ``imu``, ``initial``, ``motion``, ``scheme``, ``output`` and ``compare``;
+the studies built on the same inputs read those too and have one section each for
+what is theirs alone (``alignment``, ``observability``, ``calibration``,
+``northfinder``, ``validate``, ``sweep``). Physical values are strings carrying
+their unit (``gyro_bias = "0.02 deg/h"``, ``"0.01,0.02,0.03 deg/h"`` for the three
+IMU axes). CLI flags are translated into the same nested table
+(:mod:`inserr.scenario.flags`) and go through :func:`scenario_from_dict` too, so a
+flag and a scenario key are validated by the same code.
+
+A key that is absent takes its default: the study's own (:data:`STUDY_DEFAULTS`,
+e.g. 60 s stops and a 10-minute run for an alignment) where the study has one,
+else the schema's (:data:`SCHEMA`). An analysis script keeps its own settings (sweep
+grids) in ``[analysis.NAME]`` tables, which it declares and which are validated by
+the same code (:func:`load_scenario`). Reference: ``docs/scenarios.md``.
 """
 
 from __future__ import annotations
@@ -13,9 +22,11 @@ from __future__ import annotations
 import copy
 import math
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from types import MappingProxyType
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -28,70 +39,225 @@ from inserr.schemes.vehicle_motion import HeadingHistory, Motion, Turn, YawSwing
 #: Largest number of samples (or sub-step segments) one run keeps in memory.
 MAX_SAMPLES = 3_000_000
 
-#: Schema: section -> key -> (kind, size, default). kind is a units kind, or
-#: "str", "float", "list", "table-list". size: None = scalar, 3 = axes, 6 = misalignments.
-SCHEMA: dict[str, dict[str, tuple[str, int | None, Any]]] = {
+
+class Key(NamedTuple):
+    """One scenario key.
+
+    Attributes
+    ----------
+    kind : str
+        A physical kind of :data:`inserr.core.units.UNITS` (the value is a string with
+        its unit), or ``"str"``, ``"bool"``, ``"int"``, ``"float"``, ``"list"`` (of
+        names), ``"int-list"``, ``"float-list"``, ``"table-list"`` (array of tables).
+    size : int, "list" or None
+        For physical kinds: None = one value, 3 = IMU axes (one value means all
+        three), 6 = misalignments, ``"list"`` = any number of values.
+    default : Any
+        The value when the key is absent (as a file would hold it), unless the study
+        has its own (:data:`STUDY_DEFAULTS`). None = not set.
+    doc : str
+        One line for the reference (``docs/scenarios.md``).
+    """
+
+    kind: str
+    size: int | str | None
+    default: Any
+    doc: str = ""
+
+
+_K = Key
+
+#: Schema: section -> key -> :class:`Key`.
+SCHEMA: dict[str, dict[str, Key]] = {
     "scenario": {
-        "name": ("str", None, "scenario"),
-        "duration": ("time", None, "72 h"),
-        "seed": ("int", None, 0),
+        "name": _K("str", None, "scenario", "title of reports; names the default sweep directory"),
+        "duration": _K("time", None, "72 h", "length of the run (of each run for studies)"),
+        "seed": _K("int", None, 0, "seed of every random draw (>= 0)"),
+        "runs": _K("int", None, 1, "Monte Carlo runs (validate: 1 = no Monte Carlo)"),
     },
     "site": {
-        "latitude": ("angle", None, "34 deg"),
-        "longitude": ("angle", None, "0 deg"),
-        "height": ("length", None, "0 m"),
-        "earth": ("str", None, "ellipsoid"),
+        "latitude": _K("angle", None, "34 deg", "geodetic latitude, |latitude| < 90 deg"),
+        "longitude": _K("angle", None, "0 deg", "longitude"),
+        "height": _K("length", None, "0 m", "height above the WGS84 ellipsoid"),
+        "earth": _K("str", None, "ellipsoid", "Earth shape"),
     },
     "imu": {
-        "gyro_bias": ("angular_rate", 3, "0 deg/h"),
-        "accel_bias": ("acceleration", 3, "0 ug"),
-        "gyro_scale_factor": ("ratio", 3, "0 ppm"),
-        "accel_scale_factor": ("ratio", 3, "0 ppm"),
-        "gyro_misalignment": ("angle", 6, "0 arcsec"),
-        "accel_misalignment": ("angle", 6, "0 arcsec"),
-        "arw": ("arw", None, "0 deg/sqrt(h)"),
-        "vrw": ("vrw", None, "0 ug/sqrt(Hz)"),
-        "gyro_bias_instability": ("angular_rate", None, "0 deg/h"),
-        "accel_bias_instability": ("acceleration", None, "0 ug"),
-        "gyro_correlation_time": ("time", None, "1 h"),
-        "accel_correlation_time": ("time", None, "1 h"),
+        "gyro_bias": _K("angular_rate", 3, "0 deg/h", "gyro bias, IMU x, y, z"),
+        "accel_bias": _K("acceleration", 3, "0 ug", "accelerometer bias"),
+        "gyro_scale_factor": _K("ratio", 3, "0 ppm", "gyro scale-factor error"),
+        "accel_scale_factor": _K("ratio", 3, "0 ppm", "accelerometer scale-factor error"),
+        "gyro_misalignment": _K("angle", 6, "0 arcsec", "gyro misalignment xy,xz,yx,yz,zx,zy"),
+        "accel_misalignment": _K("angle", 6, "0 arcsec", "accelerometer misalignment"),
+        "arw": _K("arw", None, "0 deg/sqrt(h)", "gyro angle random walk"),
+        "vrw": _K("vrw", None, "0 ug/sqrt(Hz)", "accelerometer velocity random walk"),
+        "gyro_bias_instability": _K(
+            "angular_rate", None, "0 deg/h", "first-order Gauss-Markov gyro bias, 1 sigma"
+        ),
+        "accel_bias_instability": _K(
+            "acceleration", None, "0 ug", "first-order Gauss-Markov accelerometer bias, 1 sigma"
+        ),
+        "gyro_correlation_time": _K("time", None, "1 h", "correlation time of the gyro one"),
+        "accel_correlation_time": _K("time", None, "1 h", "correlation time of the accel one"),
+        "sample_rate": _K("frequency", None, "100 Hz", "sample rate of simulated IMU data"),
     },
     "initial": {
-        "attitude": ("angle", 3, "0 arcsec"),
-        "velocity": ("velocity", 3, "0 m/s"),
-        "position": ("length", 3, "0 m"),
+        "attitude": _K("angle", 3, "0 arcsec", "attitude error phi_E, phi_N (tilts), phi_U"),
+        "velocity": _K("velocity", 3, "0 m/s", "velocity error E, N, U"),
+        "position": _K("length", 3, "0 m", "position error E, N, U"),
     },
     "motion": {
-        "type": ("str", None, "static"),
-        "heading": ("angle", None, "0 deg"),
-        "pitch": ("angle", None, "0 deg"),
-        "roll": ("angle", None, "0 deg"),
-        "amplitude": ("angular_rate", None, "0 deg/s"),
-        "period": ("time", None, "60 s"),
-        "rate": ("angular_rate", None, "0 deg/s"),
-        "file": ("str", None, ""),
+        "type": _K("str", None, "static", "static | yaw-swing | turn | heading-history"),
+        "heading": _K("angle", None, "0 deg", "vehicle heading, clockwise from north"),
+        "pitch": _K("angle", None, "0 deg", "vehicle pitch"),
+        "roll": _K("angle", None, "0 deg", "vehicle roll"),
+        "amplitude": _K("angular_rate", None, "0 deg/s", "yaw-swing: peak heading rate"),
+        "period": _K("time", None, "60 s", "yaw-swing: period"),
+        "rate": _K("angular_rate", None, "0 deg/s", "turn: constant heading rate"),
+        "file": _K("str", None, "", "heading-history: CSV file time_s, heading_deg"),
     },
     "scheme": {
-        "name": ("str", None, "none"),
-        "rate": ("angular_rate", None, "6 deg/s"),
-        "stop": ("time", None, "300 s"),
-        "reversal": ("time", None, "0 s"),
-        "delta": ("float", None, 0.01),
-        "variant": ("str", None, "threshold"),
-        "decision_rate": ("frequency", None, "100 Hz"),
-        "mounting": ("angle", 3, "0 deg"),
-        "steps": ("table-list", None, []),
+        "name": _K("str", None, "none", "indexing scheme"),
+        "rate": _K("angular_rate", None, "6 deg/s", "table rate"),
+        "stop": _K("time", None, "300 s", "stop (dwell) time at each position"),
+        "reversal": _K("time", None, "0 s", "continuous: reversal period (0 = never)"),
+        "delta": _K("float", None, 0.01, "flexible-two-position: stop threshold"),
+        "variant": _K("str", None, "threshold", "flexible-two-position: threshold | crossing"),
+        "decision_rate": _K("frequency", None, "100 Hz", "closed-loop schemes: decision rate"),
+        "mounting": _K("angle", 3, "0 deg", "IMU on the inner gimbal: heading, pitch, roll"),
+        "steps": _K("table-list", None, [], "custom: [[scheme.steps]] rotation table"),
     },
     "output": {
-        "step": ("time", None, "1 s"),
-        "covariance_step": ("time", None, "60 s"),
-        "substep": ("time", None, "1 s"),
-        "vertical": ("str", None, "clamped"),
+        "step": _K("time", None, "1 s", "output step of the deterministic run"),
+        "covariance_step": _K("time", None, "60 s", "output step of covariance results"),
+        "substep": _K("time", None, "1 s", "sub-step of continuous motion (exact engine)"),
+        "vertical": _K("str", None, "clamped", "vertical channel"),
+        "engine": _K("str", None, "fast", "drift engine: fast | exact (step by step)"),
     },
     "compare": {
-        "schemes": ("list", None, []),
+        "schemes": _K("list", None, [], "schemes to run side by side"),
+    },
+    "alignment": {
+        "zupt_rate": _K("frequency", None, "1 Hz", "zero-velocity update rate"),
+        "zupt_sigma": _K("velocity", None, "0.001 m/s", "zero-velocity measurement 1 sigma"),
+        "position_sigma": _K(
+            "length", None, None, "position updates with this 1 sigma (absent: none)"
+        ),
+    },
+    "observability": {
+        "headings": _K(
+            "angle", "list", [], "one stop of scheme.stop per heading (instead of a scheme)"
+        ),
+        "model": _K("str", None, "auto", "auto (alignment10 with headings, else full)"),
+        "position_updates": _K("bool", None, False, "full model: position measurements too"),
+    },
+    "calibration": {
+        "method": _K(
+            "str", None, "offaxis-four-position", "built-in position set or a .toml set file"
+        ),
+        "settle": _K("time", None, "0 s", "settling time after every move"),
+        "positioning_error": _K(
+            "angle", None, "3 arcsec", "half-width of the uniform positioning error at a stop"
+        ),
+        "positioning_model": _K("str", None, "three-axis", "what the positioning error turns"),
+        "per_sample": _K("bool", None, False, "simulate every sample (default: dwell averages)"),
+        "design": _K("bool", None, False, "rank candidate position sets instead"),
+        "design_sizes": _K("int-list", None, [4, 5, 6], "design: numbers of positions to try"),
+        "design_sensors": _K("str", None, "gyro", "design: what must be identifiable"),
+        "design_step": _K("angle", None, "90 deg", "design: gimbal step"),
+        "top": _K("int", None, 10, "design: candidate sets shown"),
+    },
+    "northfinder": {
+        "filter_period": _K("time", None, "1 s", "Kalman filter period"),
+        "gyro_tilt": _K("angle", None, "0 deg", "gyro tilt toward the rotation axis"),
+        "accel_azimuth": _K("angle", None, "0 deg", "accelerometer azimuth from the gyro axis"),
+        "accel_tilt": _K("angle", None, "0 deg", "accelerometer tilt toward the rotation axis"),
+        "latitude_known": _K("bool", None, False, "give the estimator the true latitude"),
+        "hemisphere": _K("str", None, "north", "hemisphere declared to the estimator"),
+    },
+    "validate": {
+        "chunk": _K("time", None, "1 h", "chunk length of the nonlinear reference"),
+        "confidence": _K("float", None, 0.99, "confidence of the chi-square consistency test"),
+        "random_constants": _K(
+            "bool", None, False, "the Monte Carlo also draws the constant errors"
+        ),
+    },
+    "sweep": {
+        "parameters": _K("list", None, [], "swept parameters, each NAME=V1,V2,..."),
     },
 }
+
+#: Keys whose value is one of a few words.
+CHOICES: dict[str, tuple[str, ...]] = {
+    "site.earth": ("ellipsoid", "spherical"),
+    "output.vertical": ("clamped", "free"),
+    "output.engine": ("fast", "exact"),
+    "scheme.variant": ("threshold", "crossing"),
+    "observability.model": ("auto", "alignment10", "full"),
+    "calibration.positioning_model": ("three-axis", "gimbal"),
+    "calibration.design_sensors": ("gyro", "gyro+accel"),
+    "northfinder.hemisphere": ("north", "south"),
+}
+
+#: Defaults that differ from :data:`SCHEMA`'s on purpose, per study (dotted key -> value
+#: as a file would hold it). ``drift`` (also compare, run, validate, sweep, cycle and
+#: modes) uses the schema's. Documented with the reasons in ``docs/scenarios.md``.
+STUDY_DEFAULTS: dict[str, dict[str, Any]] = {
+    "drift": {},
+    # Fine alignment after a coarse one: a P0-grade IMU whose biases are the filter's
+    # prior 1 sigma (and the true values of the simulated run), a coarse-alignment
+    # attitude prior, 60 s stops (several positions in 10 minutes) and a free vertical
+    # channel (zero-velocity updates measure vertical velocity too).
+    "alignment": {
+        "scenario.duration": "10 min",
+        "scheme.stop": "60 s",
+        "output.vertical": "free",
+        "imu.gyro_bias": "0.003 deg/h",
+        "imu.accel_bias": "30 ug",
+        "initial.attitude": "60, 60, 3600 arcsec",
+        "initial.velocity": "0.01 m/s",
+        "initial.position": "10 m",
+    },
+    # P1's set-up: its true gyro errors (the accelerometer's mirror them), a
+    # navigation-grade noise, 100 runs and seed 1.
+    "calibration": {
+        "scenario.runs": 100,
+        "scenario.seed": 1,
+        "imu.gyro_bias": "2.04173693, 3.01844241, 2.09545751 deg/h",
+        "imu.gyro_scale_factor": "100 ppm",
+        "imu.gyro_misalignment": "2.145e-5 rad",
+        "imu.accel_bias": "50, 80, 100 ug",
+        "imu.accel_scale_factor": "100 ppm",
+        "imu.accel_misalignment": "2.145e-5 rad",
+        "imu.arw": "0.0005 deg/sqrt(h)",
+        "imu.vrw": "5 ug/sqrt(Hz)",
+    },
+    # Issue 7's grade of the single gyro and accelerometer, 3-minute runs, 50 runs.
+    "northfinder": {
+        "scenario.duration": "3 min",
+        "scenario.runs": 50,
+        "imu.gyro_bias": "0.05 deg/h",
+        "imu.accel_bias": "100 ug",
+        "imu.arw": "0.001 deg/sqrt(h)",
+        "imu.vrw": "10 ug/sqrt(Hz)",
+        "imu.gyro_bias_instability": "0.005 deg/h",
+        "imu.gyro_correlation_time": "300 s",
+        "imu.accel_correlation_time": "300 s",
+    },
+}
+
+#: The sections every scenario parses at once (what the drift engine reads).
+_CORE_SECTIONS = frozenset(
+    {"scenario", "site", "imu", "initial", "motion", "scheme", "output", "compare"}
+)
+#: Studies that build ``scheme.name`` (and ``compare.schemes``) as an indexing scheme;
+#: the north finder's table turns continuously at ``scheme.rate`` (either sign).
+_SCHEME_STUDIES = frozenset({"drift", "alignment", "calibration"})
+#: Studies whose vehicle motion runs over ``scenario.duration``.
+_MOTION_STUDIES = frozenset({"drift", "alignment"})
+
+#: The section of an analysis script's own tables, ``[analysis.NAME]``: kept unread by
+#: the studies, validated by the script's declaration (``analysis=`` of :func:`load_scenario`).
+ANALYSIS = "analysis"
 
 MOTION_TYPES = ("static", "yaw-swing", "turn", "heading-history")
 STEP_KEYS = {
@@ -103,12 +269,32 @@ STEP_KEYS = {
 }
 
 
+def study_default(key: str, study: str = "drift") -> Any:
+    """The default of a dotted key for a study (the study's own, else the schema's).
+
+    Parameters
+    ----------
+    key : str
+        Dotted scenario key, e.g. ``"scheme.stop"``.
+    study : str
+        A key of :data:`STUDY_DEFAULTS`.
+
+    Returns
+    -------
+    Any
+        The default as a scenario file would hold it (``"60 s"``, ``100``, ``False``).
+    """
+    section, _, name = key.partition(".")
+    return STUDY_DEFAULTS[study].get(key, SCHEMA[section][name].default)
+
+
 @dataclass(frozen=True)
 class Scenario:
     """A validated scenario (SI units inside).
 
     Use :meth:`timeline` to get the IMU attitude history of its scheme (or of any
-    scheme name, for comparisons).
+    scheme name, for comparisons), and :meth:`value` for any key in SI (the study
+    sections included).
     """
 
     name: str
@@ -127,8 +313,35 @@ class Scenario:
     substep: float
     vertical: str
     compare: tuple[str, ...]
+    engine: str
     raw: dict = field(compare=False, repr=False)
     base_dir: Path | None = field(default=None, compare=False, repr=False)
+    study: str = "drift"
+    values: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    analysis: Mapping[str, Mapping[str, Key]] | None = field(
+        default=None, compare=False, repr=False
+    )
+
+    def value(self, key: str) -> Any:
+        """The validated value of a dotted key, SI (e.g. ``value("alignment.zupt_rate")``).
+
+        Raises
+        ------
+        KeyError
+            For a key that is neither in :data:`SCHEMA` nor a declared analysis key.
+        """
+        if key in self.values:
+            return self.values[key]
+        section, _, name = key.partition(".")
+        if section not in _CORE_SECTIONS and name in SCHEMA.get(section, {}):
+            # A study key left at its default: parsed on demand (defaults are valid).
+            return _value(SCHEMA[section][name], key, study_default(key, self.study))
+        raise KeyError(key)
+
+    def given(self, key: str) -> bool:
+        """Whether the dotted key was written (in the file or by a flag), not defaulted."""
+        section, _, name = key.partition(".")
+        return name in self.raw.get(section, {})
 
     def scheme(self, name: str | None = None):
         """The scheme object (``name`` overrides the scenario's scheme)."""
@@ -147,6 +360,18 @@ class Scenario:
         table = self.scheme(name).plan(self.motion, self.duration)
         return build_timeline(table, self.motion, self.duration, self.substep)
 
+    def history(self, name: str | None = None):
+        """The exact IMU attitude history of the scenario's (or ``name``'s) scheme.
+
+        A :class:`~inserr.schemes.composition.ScheduleHistory`: the table schedule of the
+        scheme composed with the vehicle motion, without sub-steps.
+        """
+        from inserr.schemes.composition import ScheduleHistory
+
+        return ScheduleHistory(
+            self.scheme(name).plan(self.motion, self.duration), self.motion, self.duration
+        )
+
     def with_changes(self, changes: dict[str, Any]) -> Scenario:
         """A new scenario with dotted keys replaced (e.g. ``{"scheme.stop": "60 s"}``)."""
         raw = copy.deepcopy(self.raw)
@@ -157,7 +382,7 @@ class Scenario:
                     key, "unknown scenario key", f"use one of: {', '.join(all_keys())}"
                 )
             raw.setdefault(section, {})[name] = value
-        return scenario_from_dict(raw, self.base_dir)
+        return scenario_from_dict(raw, self.base_dir, study=self.study, analysis=self.analysis)
 
 
 def all_keys() -> list[str]:
@@ -176,21 +401,77 @@ def _options_for(name: str, opts: dict) -> dict:
     return {k: v for k, v in opts.items() if k in keep}
 
 
-def _value(section: str, key: str, raw: Any) -> Any:
-    kind, size, _ = SCHEMA[section][key]
-    fld = f"{section}.{key}"
+def _analysis_tables(table: Any) -> dict[str, dict[str, Any]]:
+    if not isinstance(table, dict) or not all(isinstance(v, dict) for v in table.values()):
+        raise InputError(ANALYSIS, "must hold tables only", "write [analysis.NAME] tables")
+    return {name: dict(t) for name, t in table.items()}
+
+
+def _analysis_values(
+    given: Mapping[str, Mapping[str, Any]], declared: Mapping[str, Mapping[str, Key]]
+) -> dict[str, Any]:
+    """Validated values of the ``[analysis.NAME]`` tables a script declares."""
+    for name, table in given.items():
+        if name not in declared:
+            raise InputError(
+                f"{ANALYSIS}.{name}",
+                "unknown analysis table",
+                f"use one of: {', '.join(f'{ANALYSIS}.{n}' for n in declared)}",
+            )
+        for key in table:
+            if key not in declared[name]:
+                raise InputError(
+                    f"{ANALYSIS}.{name}.{key}",
+                    "unknown key",
+                    f"use one of: {', '.join(declared[name])}",
+                )
+    out = {}
+    for name, keys in declared.items():
+        table = given.get(name, {})
+        for key, spec in keys.items():
+            dotted = f"{ANALYSIS}.{name}.{key}"
+            out[dotted] = _value(spec, dotted, table.get(key, spec.default))
+    return out
+
+
+def _is_number(raw: Any) -> bool:
+    return isinstance(raw, (int, float)) and not isinstance(raw, bool)
+
+
+def _value(spec: Key, fld: str, raw: Any) -> Any:
+    """One key's value, validated and in SI (``fld`` is its dotted name)."""
+    kind, size = spec.kind, spec.size
+    if raw is None:  # only a default can be None (TOML has no null): "not set"
+        return None
     if kind == "str":
         if not isinstance(raw, str):
             raise InputError(fld, f"expected a string, got {raw!r}")
+        choices = CHOICES.get(fld)
+        if choices is not None and raw not in choices:
+            raise InputError(fld, f"unknown value {raw!r}", f"use one of: {', '.join(choices)}")
+        return raw
+    if kind == "bool":
+        if not isinstance(raw, bool):
+            raise InputError(fld, f"expected true or false, got {raw!r}")
         return raw
     if kind == "int":
         if isinstance(raw, bool) or not isinstance(raw, int):
             raise InputError(fld, f"expected an integer, got {raw!r}")
         return raw
     if kind == "float":
-        if isinstance(raw, bool) or not isinstance(raw, (int, float)) or not math.isfinite(raw):
+        if not _is_number(raw) or not math.isfinite(raw):
             raise InputError(fld, f"expected a finite number, got {raw!r}")
         return float(raw)
+    if kind == "int-list":
+        if not isinstance(raw, list) or not all(
+            isinstance(v, int) and not isinstance(v, bool) for v in raw
+        ):
+            raise InputError(fld, f"expected a list of integers, got {raw!r}")
+        return tuple(raw)
+    if kind == "float-list":
+        if not isinstance(raw, list) or not all(_is_number(v) and math.isfinite(v) for v in raw):
+            raise InputError(fld, f"expected a list of finite numbers, got {raw!r}")
+        return tuple(float(v) for v in raw)
     if kind == "list":
         if not isinstance(raw, list) or not all(isinstance(v, str) for v in raw):
             raise InputError(fld, f"expected a list of names, got {raw!r}")
@@ -199,7 +480,17 @@ def _value(section: str, key: str, raw: Any) -> Any:
         if not isinstance(raw, list) or not all(isinstance(v, dict) for v in raw):
             raise InputError(fld, "expected an array of tables ([[scheme.steps]])")
         return raw
-    if isinstance(raw, (int, float)) and not isinstance(raw, bool) and raw == 0:
+    if size == "list":
+        # An array of quantities (["0 deg", "180 deg"]) or one string ("0, 180 deg").
+        if isinstance(raw, str):
+            n = len(raw.split(","))
+            return tuple(float(v) for v in np.atleast_1d(parse_quantity(raw, kind, fld, size=n)))
+        if not isinstance(raw, list):
+            raise InputError(fld, f"expected a list of quantities, got {raw!r}")
+        return tuple(
+            float(_value(Key(kind, None, None), f"{fld}[{i}]", v)) for i, v in enumerate(raw)
+        )
+    if _is_number(raw) and raw == 0:
         raw = f"0 {_first_unit(kind)}"  # a bare 0 needs no unit
     return parse_quantity(raw, kind, fld, size=size)
 
@@ -210,13 +501,13 @@ def _first_unit(kind: str) -> str:
     return units_for(kind)[0]
 
 
-def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario TOML file.
+def read_scenario_file(path: str | Path) -> tuple[dict, Path]:
+    """The parsed TOML of a scenario file and its directory, not yet validated.
 
     Raises
     ------
     InputError
-        Missing file, malformed TOML, unknown section/key, wrong unit, bad value.
+        Missing file, not UTF-8, malformed TOML.
     """
     p = Path(path)
     if not p.is_file():
@@ -233,16 +524,76 @@ def load_scenario(path: str | Path) -> Scenario:
         raise InputError(
             str(path), f"malformed TOML ({exc})", "fix the syntax at that line"
         ) from None
-    return scenario_from_dict(data, base_dir=p.parent)
+    return data, p.parent
 
 
-def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
-    """Validate a nested dict (parsed TOML or translated CLI flags) into a :class:`Scenario`."""
+def load_scenario(
+    path: str | Path,
+    *,
+    study: str = "drift",
+    analysis: Mapping[str, Mapping[str, Key]] | None = None,
+) -> Scenario:
+    """Read and validate a scenario TOML file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file; relative file names inside it are relative to its directory.
+    study : str
+        Whose defaults fill the absent keys (a key of :data:`STUDY_DEFAULTS`).
+    analysis : mapping, optional
+        The ``[analysis.NAME]`` tables an analysis script reads (its sweep grids):
+        NAME -> key -> :class:`Key`, validated like the schema's and read back with
+        :meth:`Scenario.value` (``"analysis.NAME.key"``). Without it those tables are
+        kept, unread, so an analysis' scenario file also runs under the CLI.
+
+    Raises
+    ------
+    InputError
+        Missing file, malformed TOML, unknown section/key, wrong unit, bad value.
+    """
+    data, base_dir = read_scenario_file(path)
+    return scenario_from_dict(data, base_dir, study=study, analysis=analysis)
+
+
+def scenario_from_dict(
+    data: dict,
+    base_dir: Path | None = None,
+    *,
+    study: str = "drift",
+    analysis: Mapping[str, Mapping[str, Key]] | None = None,
+) -> Scenario:
+    """Validate a nested dict (parsed TOML or translated CLI flags) into a :class:`Scenario`.
+
+    Parameters
+    ----------
+    data : dict
+        Section -> key -> value, as a TOML file holds them.
+    base_dir : Path, optional
+        Directory that relative file names are relative to.
+    study : str
+        Whose defaults fill the absent keys (a key of :data:`STUDY_DEFAULTS`); also
+        which cross-checks apply (the drift engine's memory bound, the scheme).
+    analysis : mapping, optional
+        The ``[analysis.NAME]`` tables the caller reads (see :func:`load_scenario`).
+
+    Returns
+    -------
+    Scenario
+        Every key validated; :meth:`Scenario.value` gives any of them in SI.
+    """
+    if study not in STUDY_DEFAULTS:  # a programming error, not bad input
+        raise ValueError(f"unknown study {study!r}; use one of {', '.join(STUDY_DEFAULTS)}")
     raw: dict[str, dict[str, Any]] = {}
     for section, table in data.items():
+        if section == ANALYSIS:
+            raw[section] = _analysis_tables(table)
+            continue
         if section not in SCHEMA:
             raise InputError(
-                section, "unknown scenario section", f"use one of: {', '.join(SCHEMA)}"
+                section,
+                "unknown scenario section",
+                f"use one of: {', '.join([*SCHEMA, ANALYSIS + '.NAME'])}",
             )
         if not isinstance(table, dict):
             raise InputError(section, "must be a table ([section])")
@@ -254,25 +605,36 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
                     f"use one of: {', '.join(SCHEMA[section])}",
                 )
         raw[section] = dict(table)
-    v: dict[str, dict[str, Any]] = {}
+    defaults = STUDY_DEFAULTS[study]
+    values: dict[str, Any] = {}
     for section, keys in SCHEMA.items():
-        v[section] = {}
-        for key, (_, _, default) in keys.items():
-            given = raw.get(section, {}).get(key, default)
-            v[section][key] = _value(section, key, given)
+        given = raw.get(section, {})
+        # The study sections are parsed when given (to validate them) and otherwise
+        # only when read (Scenario.value): the drift engine does not pay for them.
+        core = section in _CORE_SECTIONS
+        for key, spec in keys.items():
+            if core or key in given:
+                dotted = f"{section}.{key}"
+                default = defaults.get(dotted, spec.default)
+                values[dotted] = _value(spec, dotted, given.get(key, default))
+    if analysis is not None:
+        values.update(_analysis_values(raw.get(ANALYSIS, {}), analysis))
+
+    def sect(name: str) -> dict[str, Any]:
+        return {k: values[f"{name}.{k}"] for k in SCHEMA[name]}
 
     sc, si, im, ini, mo, sh, out = (
-        v[k] for k in ("scenario", "site", "imu", "initial", "motion", "scheme", "output")
+        sect(k) for k in ("scenario", "site", "imu", "initial", "motion", "scheme", "output")
     )
     duration = sc["duration"]
     if duration <= 0:
         raise InputError(
             "scenario.duration", f"must be > 0, got {duration / 3600:g} h", "give e.g. 72 h"
         )
-    if si["earth"] not in ("ellipsoid", "spherical"):
-        raise InputError(
-            "site.earth", f"unknown Earth model {si['earth']!r}", "use ellipsoid or spherical"
-        )
+    if sc["seed"] < 0:
+        raise InputError("scenario.seed", f"must be >= 0, got {sc['seed']}", "give e.g. 0")
+    if sc["runs"] < 1:
+        raise InputError("scenario.runs", f"must be >= 1, got {sc['runs']}", "give e.g. 100")
     try:
         site = Site(
             si["latitude"], si["longitude"], si["height"], spherical=si["earth"] == "spherical"
@@ -296,37 +658,38 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
         )
     except InputError as exc:
         raise InputError(f"imu.{exc.field}", exc.problem, exc.fix) from None
+    if im["sample_rate"] <= 0:
+        raise InputError("imu.sample_rate", "must be > 0 Hz", "give e.g. 100 Hz")
     init = InitialErrors(ini["attitude"], ini["velocity"], ini["position"])
     motion = _motion(mo, base_dir)
-    motion.pieces(duration)  # a heading history shorter than the run fails here, early
-    if sh["rate"] <= 0:
-        raise InputError("scheme.rate", "table rate must be > 0", "give e.g. 6 deg/s")
-    if sh["stop"] < 0:
-        raise InputError("scheme.stop", "stop time must be >= 0", "give e.g. 300 s")
+    if study in _MOTION_STUDIES:
+        motion.pieces(duration)  # a heading history shorter than the run fails here, early
+    if study in _SCHEME_STUDIES:
+        if sh["rate"] <= 0:
+            raise InputError("scheme.rate", "table rate must be > 0", "give e.g. 6 deg/s")
+        if sh["stop"] < 0:
+            raise InputError("scheme.stop", "stop time must be >= 0", "give e.g. 300 s")
     for key in ("step", "covariance_step", "substep"):
         if out[key] <= 0:
             raise InputError(f"output.{key}", "must be > 0", "give e.g. 1 s")
-    # The engine keeps every output sample (and, under continuous motion, every
-    # sub-step segment) in memory: about 1.3 MB per hour at 1 s, so 30 days at 1 s
-    # is ~1 GB. Refuse beyond that before any work, with the fix.
-    grids = [("step", out["step"]), ("covariance_step", out["covariance_step"])]
-    if not motion.is_static:
-        grids.append(("substep", out["substep"]))
-    for key, dt in grids:
-        flag = "covariance-step" if key == "covariance_step" else key
-        n = duration / dt
-        if n > MAX_SAMPLES:
-            raise InputError(
-                f"output.{key}",
-                f"{duration / 3600:g} h at {dt:g} s is {n:.3g} samples, more than the "
-                f"{MAX_SAMPLES:.3g} kept in memory",
-                f"use a coarser output.{key} (flag --{flag}) of at least "
-                f"{math.ceil(duration / MAX_SAMPLES * 1000.0) / 1000.0:g} s, or a shorter duration",
-            )
-    if out["vertical"] not in ("clamped", "free"):
-        raise InputError(
-            "output.vertical", f"unknown mode {out['vertical']!r}", "use clamped or free"
-        )
+    if study == "drift":
+        # The engine keeps every output sample (and, under continuous motion, every
+        # sub-step segment) in memory: about 1.3 MB per hour at 1 s, so 30 days at 1 s
+        # is ~1 GB. Refuse beyond that before any work, with the fix.
+        grids = [("step", out["step"]), ("covariance_step", out["covariance_step"])]
+        if not motion.is_static:
+            grids.append(("substep", out["substep"]))
+        for key, dt in grids:
+            n = duration / dt
+            if n > MAX_SAMPLES:
+                raise InputError(
+                    f"output.{key}",
+                    f"{duration / 3600:g} h at {dt:g} s is {n:.3g} samples, more than the "
+                    f"{MAX_SAMPLES:.3g} kept in memory",
+                    f"use a coarser output.{key} of at least "
+                    f"{math.ceil(duration / MAX_SAMPLES * 1000.0) / 1000.0:g} s, "
+                    "or a shorter duration",
+                )
     opts: dict[str, Any] = {
         "reversal": sh["reversal"],
         "delta": sh["delta"],
@@ -356,18 +719,23 @@ def scenario_from_dict(data: dict, base_dir: Path | None = None) -> Scenario:
         dt_cov=out["covariance_step"],
         substep=out["substep"],
         vertical=out["vertical"],
-        compare=v["compare"]["schemes"],
+        compare=values["compare.schemes"],
+        engine=out["engine"],
         raw=raw,
         base_dir=base_dir,
+        study=study,
+        values=MappingProxyType(values),
+        analysis=analysis,
     )
-    scen.scheme(scen.scheme_name)  # unknown scheme names fail here, before any work
-    for name in scen.compare:
-        try:
-            scen.scheme(name)
-        except InputError as exc:
-            if "unknown scheme" not in exc.problem:
-                raise
-            raise InputError("compare.schemes", exc.problem, exc.fix) from None
+    if study in _SCHEME_STUDIES:
+        scen.scheme(scen.scheme_name)  # unknown scheme names fail here, before any work
+        for name in scen.compare:
+            try:
+                scen.scheme(name)
+            except InputError as exc:
+                if "unknown scheme" not in exc.problem:
+                    raise
+                raise InputError("compare.schemes", exc.problem, exc.fix) from None
     return scen
 
 

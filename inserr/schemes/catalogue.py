@@ -62,16 +62,16 @@ def build_scheme(name: str, rate: float, stop: float, **options):
     """
     if name not in SCHEMES:
         raise InputError(
-            "--scheme (scheme.name)",
+            "scheme.name",
             f"unknown scheme {name!r}",
             f"use one of: {', '.join(SCHEMES)}",
         )
     if not (math.isfinite(rate) and rate > 0):
-        raise InputError("--rate (scheme.rate)", f"table rate must be > 0, got {rate!r}")
+        raise InputError("scheme.rate", f"table rate must be > 0, got {rate!r}")
     if not (math.isfinite(stop) and stop >= 0) or (
         stop == 0 and name not in ("continuous", "none")
     ):
-        raise InputError("--stop (scheme.stop)", f"stop time must be > 0 s, got {stop!r}")
+        raise InputError("scheme.stop", f"stop time must be > 0 s, got {stop!r}")
     mounting = options.pop("mounting", None)
     if name == "none":
         s = none_scheme(rate, stop)

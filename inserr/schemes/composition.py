@@ -18,8 +18,10 @@ import math
 import numpy as np
 
 from inserr.core.errors import InputError
+from inserr.core.rotations import rot_x, rot_z
+from inserr.model.attitude_history import Pieces
 from inserr.model.timeline import Timeline
-from inserr.schemes.turntable import TableSchedule, gimbal_axis_b
+from inserr.schemes.turntable import TableSchedule, gimbal_axis_b, table_dcm
 from inserr.schemes.vehicle_motion import Motion
 
 
@@ -125,4 +127,167 @@ def _attitudes(
     for i in range(0, len(t), chunk):
         tt = t[i : i + chunk]
         out[i : i + chunk] = motion.attitude(tt) @ table.dcm_at(tt, motion)
+    return out
+
+
+class ScheduleHistory:
+    """The exact IMU attitude of a table schedule on a vehicle motion, as smooth pieces.
+
+    ``C_s^n(t) = C_b^n(t) C_s^b(t)`` with the vehicle's ``C_b^n`` and the table's
+    ``C_s^b = rot_z(a) rot_x(b) C_s^t``, and ``w_ns^n = w_nb^n + C_b^n w_bs^b`` with the
+    gimbal rates (``w_bs^b = a' e_z + b' rot_z(a) e_x``). Nothing is sub-stepped: the
+    fast engine (:mod:`inserr.model.fast_propagation`) samples this continuous motion
+    where its quadrature needs it. Pieces are cut at every table segment and at the
+    motion's own breakpoints (a heading history's samples), so the attitude is
+    analytic inside each. In an isolation segment the outer-gimbal rate follows from
+    the implicit function theorem: with ``psi(t, a)`` the IMU heading,
+    ``a' = (target_rate - d psi / dt) / (d psi / d a)``.
+
+    Parameters
+    ----------
+    table : TableSchedule
+        Output of a scheme's ``plan``.
+    motion : Motion
+        Vehicle motion.
+    duration : float, s
+        Length of the run.
+    """
+
+    def __init__(self, table: TableSchedule, motion: Motion, duration: float):
+        if not (math.isfinite(duration) and duration > 0):
+            raise InputError("duration", f"must be a positive time, got {duration!r}")
+        self.table = table
+        self.motion = motion
+        self._duration = float(duration)
+        m_breaks, _ = motion.pieces(duration)
+        breaks = np.union1d(np.concatenate([table.t0[table.t0 < duration], [duration]]), m_breaks)
+        breaks = breaks[breaks <= duration]
+        keep = np.concatenate([[True], np.diff(breaks) > 1e-9])
+        breaks = breaks[keep]
+        breaks[-1] = duration
+        self._breaks = breaks
+        mid = 0.5 * (breaks[:-1] + breaks[1:])
+        self._segment = np.clip(np.searchsorted(table.t0, mid, side="right") - 1, 0, len(table) - 1)
+
+    @property
+    def duration(self) -> float:
+        """Length of the run, s."""
+        return self._duration
+
+    def pieces(self) -> Pieces:
+        """Table segments cut at the motion's breakpoints; bandwidth vehicle + gimbal rate."""
+        a, b = self._breaks[:-1], self._breaks[1:]
+        k = self._segment
+        kind = np.array(self.table.kind)[k]
+        vehicle = self.motion.rate_bound(a, b)
+        gimbal = np.where(kind == "rotate", np.abs(self.table.rate[k]), 0.0)
+        # Isolation: the table cancels the yaw, so the IMU turns at the target rate; the
+        # vehicle still wobbles the tilt through the gimbal at its own bandwidth.
+        iso = kind == "isolate"
+        gimbal[iso] = np.abs(self.table.target_rate[k[iso]])
+        still = (kind == "stop") & (vehicle == 0.0)
+        stop = kind == "stop"
+        table = np.full((len(k), 3, 3), np.nan)
+        if np.any(stop):
+            table[stop] = table_dcm(
+                self.table.a0[k[stop]], self.table.b0[k[stop]], self.table.mounting
+            )
+        # Constant angular velocity: a still vehicle with the table stopped or turning, or
+        # a vehicle turning at a constant rate (a turn, a piece of a heading history)
+        # with the table stopped.
+        steady = self.motion.constant_rate(a, b)
+        constant = ((kind == "stop") & steady) | ((kind == "rotate") & (vehicle == 0.0))
+        # Phase classes (with a periodic vehicle): stops see the vehicle through a fixed
+        # table (class 0); isolation holds of one target heading are one function of the
+        # vehicle phase each (classes 1, 2, ...).
+        period = self.motion.repeat_period()
+        phase_class = np.full(len(k), -1)
+        if period is not None:
+            phase_class[stop] = 0
+            hold = (kind == "isolate") & (self.table.target_rate[k] == 0.0)
+            if np.any(hold):
+                target = np.round(np.mod(self.table.target_heading[k[hold]], 2 * np.pi), 9)
+                _, cls = np.unique(target, return_inverse=True)
+                phase_class[hold] = 1 + cls.reshape(-1)
+        return Pieces(
+            self._breaks,
+            vehicle + gimbal,
+            still,
+            table,
+            period,
+            constant,
+            phase_class,
+        )
+
+    def timeline(self, substep: float = 1.0) -> Timeline:
+        """The same history as a :class:`~inserr.model.timeline.Timeline` (:func:`build_timeline`).
+
+        Continuous motion is cut into ``substep``-second sub-steps of constant rate: the
+        model of the step-by-step engine, exact for stops and turns on a still vehicle.
+        """
+        return build_timeline(self.table, self.motion, self._duration, substep)
+
+    def evaluate_vehicle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``C_b^n`` (N, 3, 3) and ``w_nb^n`` (N, 3, rad/s, ENU) of the vehicle at times ``t``."""
+        t = np.asarray(t, dtype=float)
+        return _rot_z(-self.motion.heading_at(t)) @ self.motion.tilt, self.motion.rate_n(t)
+
+    def evaluate(self, t: np.ndarray, piece: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``C_s^n`` (N, 3, 3) and ``w_ns^n`` (N, 3, rad/s, ENU) at times ``t`` of ``piece``."""
+        t = np.asarray(t, dtype=float)
+        k = self._segment[np.asarray(piece)]
+        tab = self.table
+        # Heading-only vehicle motion: C_b^n = rot_z(-H) C_tilt (two sines per time).
+        c_bn = _rot_z(-self.motion.heading_at(t)) @ self.motion.tilt
+        w_nb = self.motion.rate_n(t)
+        a, b = tab.angles_at(t, self.motion)
+        c_sb = (
+            _rot_z(a) if tab.mounting is None and not np.any(b) else table_dcm(a, b, tab.mounting)
+        )
+        kind = np.array(tab.kind)[k]
+        outer = np.array([g == "outer" for g in tab.gimbal])[k]
+        rate = np.where(kind == "rotate", tab.rate[k], 0.0)
+        a_dot = np.where(outer, rate, 0.0)
+        b_dot = np.where(outer, 0.0, rate)
+        iso = kind == "isolate"
+        if np.any(iso):
+            a_dot[iso] = self._isolation_rate(t[iso], k[iso], c_bn[iso], w_nb[iso], a[iso], b[iso])
+        w_bs = np.zeros((len(t), 3))
+        w_bs[:, 2] = a_dot
+        w_bs[:, 0] = b_dot * np.cos(a)
+        w_bs[:, 1] = b_dot * np.sin(a)
+        w = w_nb + np.einsum("nij,nj->ni", c_bn, w_bs)
+        return c_bn @ c_sb, w
+
+    def _isolation_rate(self, t, k, c_bn=None, w_nb=None, a=None, b=None) -> np.ndarray:
+        """Outer-gimbal rate that keeps the IMU heading on its target (rad/s)."""
+        tab = self.table
+        if c_bn is None:
+            c_bn = self.motion.attitude(t)
+            w_nb = self.motion.rate_n(t)
+            a, b = tab.angles_at(t, self.motion)
+        m = np.eye(3) if tab.mounting is None else tab.mounting
+        u = rot_x(b) @ (m @ np.array([0.0, 1.0, 0.0]))  # IMU y axis before the outer gimbal
+        ru = np.einsum("nij,nj->ni", rot_z(a), u)
+        v = np.einsum("nij,nj->ni", c_bn, ru)  # IMU y axis in n
+        dv_dt = np.cross(w_nb, v)
+        dv_da = np.einsum("nij,nj->ni", c_bn, np.cross(np.array([0.0, 0.0, 1.0]), ru))
+        den = v[:, 0] ** 2 + v[:, 1] ** 2
+
+        def dpsi(dv: np.ndarray) -> np.ndarray:
+            # heading = atan2(E, N): d heading = (N dE - E dN) / (E^2 + N^2)
+            return (v[:, 1] * dv[:, 0] - v[:, 0] * dv[:, 1]) / den
+
+        return (tab.target_rate[k] - dpsi(dv_dt)) / dpsi(dv_da)
+
+
+def _rot_z(angle: np.ndarray) -> np.ndarray:
+    """:func:`inserr.core.rotations.rot_z` for many angles, built from one sine and cosine each."""
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros(np.shape(angle) + (3, 3))
+    out[..., 0, 0] = c
+    out[..., 0, 1] = -s
+    out[..., 1, 0] = s
+    out[..., 1, 1] = c
+    out[..., 2, 2] = 1.0
     return out

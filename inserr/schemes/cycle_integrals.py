@@ -209,7 +209,7 @@ def cycle_integrals(scheme: TableScheme, motion: Motion | None = None) -> CycleI
     if not isinstance(scheme, TableScheme) or not scheme.steps:
         name = getattr(scheme, "name", str(scheme))
         raise InputError(
-            "--scheme",
+            "scheme.name",
             f"{name} has no fixed cycle",
             "cycle integrals exist for periodic open-loop schemes; use `inserr drift` for this one",
         )
@@ -298,3 +298,39 @@ class _Accumulator:
         self.s_mis += self.u_mis * t_turn + mis2
         self.u_sf += sf1
         self.u_mis += mis1
+
+
+def scenario_cycle(scen) -> tuple[TableScheme, Motion, str]:
+    """The scheme of a scenario and the static base its cycle integrals are taken on.
+
+    Cycle integrals are defined on a static base: a moving base is held at its
+    attitude at t = 0.
+
+    Parameters
+    ----------
+    scen : Scenario
+        ``scheme.name`` must be given (a periodic open-loop scheme).
+
+    Returns
+    -------
+    scheme : TableScheme
+    base : Motion
+        Static, at the scenario's heading, pitch and roll at t = 0.
+    description : str
+        The base in words.
+    """
+    if not scen.given("scheme.name"):
+        raise InputError("scheme.name", "no scheme given", "name a periodic open-loop scheme")
+    m = scen.motion
+    h0 = float(m.heading_at(0.0))
+    base = Motion(heading=h0, pitch=m.pitch, roll=m.roll)
+    if h0 == 0.0 and m.pitch == 0.0 and m.roll == 0.0:
+        desc = "level, heading 0 (body = ENU)"
+    else:
+        desc = (
+            f"heading {math.degrees(h0):g} deg, pitch {math.degrees(m.pitch):g} deg, "
+            f"roll {math.degrees(m.roll):g} deg"
+        )
+    if type(m) is not Motion:
+        desc += f" (the scenario's {m.name} motion held at its t = 0 attitude)"
+    return scen.scheme(), base, desc

@@ -47,6 +47,7 @@ oscillation (static base, steady turn, swing below ``delta``) every stop lasts
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass, field
 
@@ -56,7 +57,7 @@ from inserr.core.errors import InputError
 from inserr.core.imu import MISALIGNMENT_INDEX, MISALIGNMENTS
 from inserr.core.rotations import log_so3
 from inserr.schemes.turntable import ScheduleBuilder, TableSchedule
-from inserr.schemes.vehicle_motion import Motion
+from inserr.schemes.vehicle_motion import Motion, heading_rate_breaks
 
 #: Turn directions of the mean-zero two-position cycle (0, +pi, 0, -pi, 0).
 TURNS = (+1.0, -1.0, -1.0, +1.0)
@@ -69,6 +70,10 @@ PHASE_FRACTIONS = ((3.0 - math.sqrt(5.0)) / 4.0, (math.sqrt(5.0) - 1.0) / 4.0)
 PHASE_MODULUS = 0.5
 #: Yaw-rate history used for the period estimate, in stop times.
 HISTORY_STOPS = 8
+#: Swing tests guessed before they are computed together (see NullingTwoPosition._periods).
+SWING_BATCH = 64
+#: Yaw-rate samples computed either side of a time where the rate may change sign.
+BREAK_SAMPLES = 3
 
 
 def yaw_rate_reversals(motion: Motion, duration: float, f: float) -> np.ndarray:
@@ -76,8 +81,11 @@ def yaw_rate_reversals(motion: Motion, duration: float, f: float) -> np.ndarray:
 
     Each time is the linear interpolation of the zero between two samples of
     opposite sign, or the middle of a run of exactly-zero samples between them (a
-    hold between opposite turns). The samples are processed an hour at a time to
-    bound memory.
+    hold between opposite turns). Where the motion tells where its rate can change
+    sign (:func:`~inserr.schemes.vehicle_motion.heading_rate_breaks`) only the
+    samples within a few of those times are computed: between them the rate keeps
+    its sign, so the other samples cannot change the result. Otherwise every sample
+    is, an hour at a time to bound memory.
 
     Parameters
     ----------
@@ -93,6 +101,42 @@ def yaw_rate_reversals(motion: Motion, duration: float, f: float) -> np.ndarray:
     (K,) ndarray
         Reversal times, s, sorted and unique.
     """
+    breaks = heading_rate_breaks(motion, 0.0, duration)
+    if breaks is None:
+        return _reversals_sampled(motion, duration, f)
+    # Samples 0 .. floor(f duration); BREAK_SAMPLES either side of each break (a margin
+    # far beyond the breaks' round-off) hold every sign change and its two samples.
+    centre = np.floor(breaks * f).astype(np.int64)
+    k = _sorted_unique((centre[:, None] + np.arange(-BREAK_SAMPLES, BREAK_SAMPLES + 2)).ravel())
+    k = k[(k >= 0) & (k <= math.floor(duration * f))]
+    t = k / f
+    return _sorted_unique(_sign_changes(t, motion.heading_rate(t), f))
+
+
+def _sorted_unique(x: np.ndarray) -> np.ndarray:
+    """``np.unique(x)`` by sorting (numpy 2.4's hash-based unique is far slower here)."""
+    x = np.sort(x)
+    return x[np.concatenate([[True], x[1:] != x[:-1]])] if len(x) else x
+
+
+def _sign_changes(t: np.ndarray, r: np.ndarray, f: float) -> np.ndarray:
+    """Zeros of the rate between consecutive non-zero samples ``(t, r)`` of opposite sign."""
+    # A reversal may pass through exact zeros (a hold between opposite turns): look
+    # for sign changes between consecutive NON-ZERO samples.
+    nz = np.flatnonzero(r != 0.0)
+    tn, rn = t[nz], r[nz]
+    k = np.flatnonzero(np.sign(rn[1:]) * np.sign(rn[:-1]) < 0)
+    adjacent = np.isclose(tn[k + 1] - tn[k], 1.0 / f)
+    # Adjacent samples: the interpolated zero. Across a run of zeros: its middle.
+    return np.where(
+        adjacent,
+        tn[k] + rn[k] / (rn[k] - rn[k + 1]) * (tn[k + 1] - tn[k]),
+        0.5 * (tn[k] + tn[k + 1]),
+    )
+
+
+def _reversals_sampled(motion: Motion, duration: float, f: float) -> np.ndarray:
+    """:func:`yaw_rate_reversals` from every sample, an hour at a time."""
     out = []
     chunk = 3600.0
     t0 = 0.0
@@ -100,26 +144,14 @@ def yaw_rate_reversals(motion: Motion, duration: float, f: float) -> np.ndarray:
     while t0 < duration:
         t = np.arange(math.ceil(t0 * f), math.floor(min(t0 + chunk, duration) * f) + 1) / f
         r = motion.heading_rate(t)
-        # A reversal may pass through exact zeros (a hold between opposite turns): look
-        # for sign changes between consecutive NON-ZERO samples, carried across chunks.
+        if last is not None:  # carried across chunks
+            t, r = np.concatenate([[last[0]], t]), np.concatenate([[last[1]], r])
+        out.append(_sign_changes(t, r, f))
         nz = np.flatnonzero(r != 0.0)
-        tn, rn = t[nz], r[nz]
-        if last is not None:
-            tn, rn = np.concatenate([[last[0]], tn]), np.concatenate([[last[1]], rn])
-        k = np.flatnonzero(np.sign(rn[1:]) * np.sign(rn[:-1]) < 0)
-        adjacent = np.isclose(tn[k + 1] - tn[k], 1.0 / f)
-        # Adjacent samples: the interpolated zero. Across a run of zeros: its middle.
-        cross = np.where(
-            adjacent,
-            tn[k] + rn[k] / (rn[k] - rn[k + 1]) * (tn[k + 1] - tn[k]),
-            0.5 * (tn[k] + tn[k + 1]),
-        )
-        out.append(cross)
-        if len(tn):
-            last = (float(tn[-1]), float(rn[-1]))
+        if len(nz):
+            last = (float(t[nz[-1]]), float(r[nz[-1]]))
         t0 += chunk
-    x = np.concatenate(out) if out else np.zeros(0)
-    return np.unique(x)
+    return _sorted_unique(np.concatenate(out) if out else np.zeros(0))
 
 
 def heading_period(reversals: np.ndarray, t: float, history: float) -> float | None:
@@ -130,8 +162,9 @@ def heading_period(reversals: np.ndarray, t: float, history: float) -> float | N
 
     Parameters
     ----------
-    reversals : (K,) array
-        Sorted yaw-rate reversal times, s (:func:`yaw_rate_reversals`).
+    reversals : (K,) array or list
+        Sorted yaw-rate reversal times, s (:func:`yaw_rate_reversals`; a list is
+        searched faster).
     t : float
         End of the window, s.
     history : float
@@ -142,11 +175,11 @@ def heading_period(reversals: np.ndarray, t: float, history: float) -> float | N
     float or None
         Period, s; None with fewer than three reversals in the window.
     """
-    lo, hi = np.searchsorted(reversals, [t - history, t], side="right")
-    x = reversals[lo:hi]
-    if len(x) < 3:
+    lo = bisect.bisect_right(reversals, t - history)
+    hi = bisect.bisect_right(reversals, t)
+    if hi - lo < 3:
         return None
-    return 2.0 * float(x[-1] - x[0]) / (len(x) - 1)
+    return 2.0 * float(reversals[hi - 1] - reversals[lo]) / (hi - lo - 1)
 
 
 def step_dwell(
@@ -236,15 +269,76 @@ class NullingTwoPosition:
         if ext is not None and not (math.isfinite(ext) and ext >= 0):
             raise InputError("scheme.extension", f"must be >= 0 s, got {ext!r}")
 
-    def _oscillation(self, motion: Motion, reversals: np.ndarray, t: float) -> float | None:
-        """Heading period seen before ``t``, or None if the swing is below ``delta``."""
+    def _swing_seen(self, motion: Motion, times: list[float]) -> np.ndarray:
+        """Whether the heading swing (peak to peak) over the history before each time reaches delta.
+
+        The swing is that of 512 evenly spaced headings over ``(t - history, t]``
+        (``np.linspace`` of the arrays gives each row as one call per time would). Every
+        8th heading is looked at first: when those span ``delta`` so do all 512.
+        """
+        t = np.asarray(times, dtype=float)
+        grid = np.linspace(np.maximum(0.0, t - HISTORY_STOPS * self.stop), t, 512, axis=-1)
+
+        def swing(g: np.ndarray) -> np.ndarray:
+            return np.ptp(motion.heading_at(g.ravel()).reshape(g.shape), axis=1)
+
+        seen = swing(grid[:, ::8]) >= self.delta
+        rest = np.flatnonzero(~seen)
+        if len(rest):
+            seen[rest] = swing(grid[rest]) >= self.delta
+        return seen
+
+    def _periods(self, motion: Motion, duration: float, turn_time: float, ext: float) -> list:
+        """Heading period each stop uses (None: no oscillation seen), in order.
+
+        A stop's period is the estimate from the yaw-rate reversals before it
+        (:func:`heading_period`, a reversal being known one sample after it
+        happens), kept only if the heading swing over the same history reaches
+        ``delta``. The swing test is the costly part, and every stop's start depends on
+        the earlier outcomes; so the stops are run ahead with each outcome guessed
+        (the last one known), the guesses are tested together, and the run restarts
+        from the first wrong guess. The outcomes are those of testing one by one.
+        """
+        reversals = yaw_rate_reversals(motion, duration, self.f).tolist()
         history = HISTORY_STOPS * self.stop
-        # A reversal is known one sample after it happens.
-        period = heading_period(reversals, t - 1.0 / self.f, history)
-        if period is None:
-            return None
-        h = motion.heading_at(np.linspace(max(0.0, t - history), t, 512))
-        return period if float(np.ptp(h)) >= self.delta else None
+        starts: list[float] = []
+        periods: list[float | None] = []
+        known: dict[int, bool] = {}  # swing-test outcome of stop i, once tested
+        guessed: list[int] = []  # stops whose outcome is guessed, not yet tested
+        guess = True
+        t = 0.0
+        while True:
+            while t < duration and len(guessed) < SWING_BATCH:
+                i = len(starts)
+                period = heading_period(reversals, t - 1.0 / self.f, history) if t > 0 else None
+                if period is not None:
+                    if i not in known:
+                        guessed.append(i)
+                    if not known.get(i, guess):
+                        period = None
+                starts.append(t)
+                periods.append(period)
+                t += self._dwell(period, turn_time, ext)[0]  # the builder's clock, in its order
+                if t >= duration:
+                    break
+                t += turn_time
+            if not guessed:
+                return periods
+            seen = self._swing_seen(motion, [starts[i] for i in guessed]).tolist()
+            wrong = next((n for n, s in enumerate(seen) if s != guess), None)
+            tested = guessed if wrong is None else guessed[: wrong + 1]
+            known.update(zip(tested, seen, strict=False))
+            if wrong is not None:  # restart at the stop guessed wrong
+                i = guessed[wrong]
+                t = starts[i]
+                del starts[i:], periods[i:]
+                guess = seen[wrong]
+            guessed = []
+
+    def _dwell(self, period: float | None, turn_time: float, ext: float) -> tuple[float, bool]:
+        """The stop's dwell (s) and whether it fell back to ``Ts`` (see :func:`step_dwell`)."""
+        dwell = step_dwell(self.stop, turn_time, period, ext)
+        return (self.stop, True) if dwell is None else (dwell, False)
 
     def plan(self, motion: Motion, duration: float) -> TableSchedule:
         """Plan the table schedule the rule produces for a vehicle motion.
@@ -264,29 +358,25 @@ class NullingTwoPosition:
             ``extension``), ``lengthened`` (stops lengthened) and the
             ``period_estimates_s`` used (one per stop, s, NaN where none).
         """
-        ts = self.stop
         turn_time = math.pi / self.rate
-        ext = ts if self.extension is None else self.extension
-        reversals = yaw_rate_reversals(motion, duration, self.f)
+        ext = self.stop if self.extension is None else self.extension
+        periods = self._periods(motion, duration, turn_time, ext)
         b = ScheduleBuilder(0.0, 0.0, self.mounting)
-        periods = []
         fallbacks = lengthened = 0
-        k = 0
-        while b.t < duration:
-            period = self._oscillation(motion, reversals, b.t) if b.t > 0 else None
-            dwell = step_dwell(ts, turn_time, period, ext)
-            if dwell is None:
-                dwell = ts
-                fallbacks += 1
-            lengthened += dwell > ts
-            periods.append(math.nan if period is None else period)
+        for k, period in enumerate(periods):
+            dwell, fallback = self._dwell(period, turn_time, ext)
+            fallbacks += fallback
+            lengthened += dwell > self.stop
             b.stop(dwell, f"stop {round(math.degrees(b.a)):+d}")
             if b.t >= duration:
                 break
             d = TURNS[k % 4]
             b.rotate("outer", d * math.pi, self.rate, "turn +180" if d > 0 else "turn -180")
-            k += 1
-        b.meta.update(fallbacks=fallbacks, lengthened=lengthened, period_estimates_s=periods)
+        b.meta.update(
+            fallbacks=fallbacks,
+            lengthened=lengthened,
+            period_estimates_s=[math.nan if p is None else p for p in periods],
+        )
         return b.build()
 
 

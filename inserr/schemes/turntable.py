@@ -19,6 +19,7 @@ gimbal follows a closed-form law that holds the IMU heading fixed.
 
 from __future__ import annotations
 
+import cmath
 import math
 from dataclasses import dataclass, field
 
@@ -107,10 +108,126 @@ def imu_heading_offset(
         Heading offset, rad, clockwise from north, in [-pi, pi] (not wrapped to
         [0, 2 pi)); shape of ``a`` and ``b`` broadcast.
     """
-    p, q, z = _yaxis_parts(b, mounting)
+    return _heading_offset(c_tilt, a, *_yaxis_parts(b, mounting))
+
+
+def _heading_offset(c_tilt: np.ndarray, a, p, q, z) -> np.ndarray:
+    """:func:`imu_heading_offset` from the parts of :func:`_yaxis_parts` (computed once)."""
     a = np.asarray(a, dtype=float)[..., None]
     v = (np.cos(a) * p + np.sin(a) * q + z) @ np.asarray(c_tilt).T
     return np.arctan2(v[..., 0], v[..., 1])
+
+
+class OuterAxisHeading:
+    """IMU heading offset of a single-axis table (inner angle 0) for one vehicle tilt and mounting.
+
+    The IMU heading is ``H(t) + offset(a)`` (:func:`imu_heading_offset`). The
+    closed-loop planners evaluate the offset for thousands of angles per run; this
+    object does the set-up once and adds what they need besides the offset itself:
+    its unit phasor in closed form and bounds of its slope.
+
+    Parameters
+    ----------
+    c_tilt : (3, 3) array
+        ``C_b^n`` of the vehicle at heading 0 (:attr:`Motion.tilt
+        <inserr.schemes.vehicle_motion.Motion.tilt>`).
+    mounting : (3, 3) array, optional
+        IMU mounting ``C_s^t`` (None = identity).
+    """
+
+    def __init__(self, c_tilt: np.ndarray, mounting: np.ndarray | None = None):
+        self.c_tilt = np.asarray(c_tilt, dtype=float)
+        self._parts = _yaxis_parts(0.0, mounting)
+        # The IMU y axis in n is C_tilt (cos a p + sin a q + z); as the complex number
+        # north + i east it is cos a P + sin a Q + Z with P, Q, Z below, i.e.
+        # e^{ia} (P - iQ) / 2 + e^{-ia} (P + iQ) / 2 + Z, and e^{i offset} is that over its modulus.
+        p_, q_, z_ = (self.c_tilt @ v for v in self._parts)
+        cp, cq, cz = (complex(v[1], v[0]) for v in (p_, q_, z_))
+        self.coefficients = ((cp - 1j * cq) / 2, (cp + 1j * cq) / 2, cz)
+
+    def offset(self, a) -> np.ndarray:
+        """``imu_heading_offset(c_tilt, a, 0, mounting)``, rad, computed by the same operations."""
+        return _heading_offset(self.c_tilt, a, *self._parts)
+
+    def phasor(self, a) -> np.ndarray | complex:
+        """``exp(i offset(a))`` in closed form (equal to it to round-off), scalars or arrays.
+
+        Parameters
+        ----------
+        a : float or array_like
+            Outer gimbal angle(s), rad.
+
+        Returns
+        -------
+        complex or complex ndarray
+            Unit phasor ``cos offset + i sin offset``.
+        """
+        up, um, c = self.coefficients
+        if np.ndim(a) == 0:
+            e = cmath.exp(1j * float(a))
+            w = up * e + um / e + c
+            return w / abs(w)
+        e = np.exp(1j * np.asarray(a, dtype=float))
+        w = up * e + um / e + c
+        return w / np.abs(w)
+
+    def _elevation_sine(self) -> tuple[float, float]:
+        """``(s, sin theta)``: bound of ``|v_U|`` over all angles, sine of the outer axis' tilt."""
+        k_up = float(self.c_tilt[2, 2])
+        sin_tilt = math.sqrt(max(0.0, 1.0 - k_up * k_up))
+        p, q, z = self._parts
+        u_h, u_z = float(np.hypot(p[0], p[1])), abs(float(z[2]))
+        return u_z * abs(k_up) + u_h * sin_tilt, sin_tilt
+
+    def min_horizontal(self) -> float:
+        """Lower bound of ``|north + i east|`` of the IMU y axis over all angles (0 to 1)."""
+        s, _ = self._elevation_sine()
+        return math.sqrt(max(0.0, 1.0 - s * s)) - 1e-12
+
+    def curvature_bound(self) -> float:
+        """Bound of ``|d^2 offset / d a^2|`` over all angles (inf if the y axis can be vertical).
+
+        With the notation of :meth:`slope_bounds`, ``d offset / d a = -k_U + N / D``,
+        ``N = v_U (k_h . v_h)``, ``D = |v_h|^2 = 1 - v_U^2``. Since ``v' = k x v``,
+        ``|v_U'| <= sin theta`` and ``|(k_h . v_h)'| <= sin theta``; so ``|N| <= s sin
+        theta``, ``|N'| <= sin^2 theta + s sin theta``, ``|D'| <= 2 s sin theta`` and
+        ``|(N / D)'| <= |N'| / D + |N| |D'| / D^2`` with ``D >= 1 - s^2``.
+
+        Returns
+        -------
+        float
+            The bound, rad per rad^2.
+        """
+        s, sin_tilt = self._elevation_sine()
+        if s >= 1.0:
+            return math.inf
+        d_min = 1.0 - s * s
+        bound = (sin_tilt**2 + s * sin_tilt) / d_min + 2.0 * (s * sin_tilt) ** 2 / d_min**2
+        return bound * (1.0 + 1e-12) + 1e-12  # a few ulp wider, for the computed values
+
+    def slope_bounds(self) -> tuple[float, float]:
+        """Bounds ``lo <= -d offset / d a <= hi`` over all angles (``lo > 0``: offset decreasing).
+
+        Turning by ``da`` about the outer axis ``k`` (body z in n) moves the IMU y axis
+        ``v`` by ``k x v da``, so ``d offset / d a = -k_U + v_U (k_h . v_h) / |v_h|^2``
+        (ENU components, ``_h`` horizontal). With ``|k_h| = sin theta`` (theta the
+        tilt of the outer axis) and ``|v_U| <= s = |u_z| cos theta + |u_h| sin theta``
+        (``u`` the y axis in table coordinates), the second term is at most
+        ``eps = s sin theta / sqrt(1 - s^2)`` in size; the bounds are ``k_U -+ eps``
+        (infinite when ``s >= 1``: the y axis can point straight up).
+
+        Returns
+        -------
+        lo, hi : float
+            Bounds of ``-d offset / d a`` (dimensionless).
+        """
+        k_up = float(self.c_tilt[2, 2])
+        s, sin_tilt = self._elevation_sine()
+        if s >= 1.0:
+            return -math.inf, math.inf
+        eps = s * sin_tilt / math.sqrt(1.0 - s * s)
+        # Widened by a few ulp so that the bounds hold for the computed values too.
+        return k_up - eps - 1e-12, k_up + eps + 1e-12
 
 
 def isolation_angle(c_bn: np.ndarray, b, mounting: np.ndarray | None, target) -> np.ndarray:

@@ -148,6 +148,40 @@ class Motion:
         """True if the heading never changes."""
         return True
 
+    def rate_bound(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Bound on the angular frequencies of the body attitude over each ``[a_i, b_i]``.
+
+        The fast engine (:mod:`inserr.model.fast_propagation`) sizes its quadrature with
+        it: the heading rate for a constant-rate motion, the peak rate plus the swing
+        frequency for a yaw swing.
+
+        Parameters
+        ----------
+        a, b : (P,) arrays, s
+            Interval ends.
+
+        Returns
+        -------
+        ndarray, shape (P,)
+            rad/s (zero for a static base).
+        """
+        return np.zeros(np.shape(a))
+
+    def constant_rate(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Whether the heading rate is constant over each ``[a_i, b_i]`` (bool array).
+
+        True for a static base, a steady turn, and a heading history between samples.
+        """
+        return np.ones(np.shape(a), dtype=bool)
+
+    def repeat_period(self) -> float | None:
+        """Period after which the body attitude repeats exactly, s (None if it never does).
+
+        The fast engine reuses its quadrature of the vehicle part from one period to
+        the next. A static base returns None (its attitude is constant: nothing to reuse).
+        """
+        return None
+
     def describe(self) -> str:
         """One-line human description (angles in degrees)."""
         return (
@@ -212,6 +246,29 @@ class YawSwing(Motion):
         """True if the amplitude is zero."""
         return self.amplitude == 0.0
 
+    def rate_bound(self, a, b):
+        """Peak yaw rate plus the swing frequency (the heading is ``A T / 2 pi sin(2 pi t / T)``).
+
+        Arguments, returns and units as :meth:`Motion.rate_bound`.
+        """
+        if self.amplitude == 0.0:
+            return np.zeros(np.shape(a))
+        return np.full(np.shape(a), abs(self.amplitude) + 2.0 * math.pi / self.period)
+
+    def constant_rate(self, a, b):
+        """Constant only without swing.
+
+        Arguments, returns and units as :meth:`Motion.constant_rate`.
+        """
+        return np.full(np.shape(a), self.amplitude == 0.0)
+
+    def repeat_period(self):
+        """The swing period (None without swing).
+
+        Arguments, returns and units as :meth:`Motion.repeat_period`.
+        """
+        return float(self.period) if self.amplitude != 0.0 else None
+
     def describe(self):
         """One-line human description (angles in degrees)."""
         return (
@@ -254,6 +311,20 @@ class Turn(Motion):
     def is_static(self) -> bool:
         """True if the rate is zero."""
         return self.rate == 0.0
+
+    def rate_bound(self, a, b):
+        """The constant heading rate.
+
+        Arguments, returns and units as :meth:`Motion.rate_bound`.
+        """
+        return np.full(np.shape(a), abs(self.rate))
+
+    def repeat_period(self):
+        """One full turn, ``2 pi / |rate|`` (None without turning).
+
+        Arguments, returns and units as :meth:`Motion.repeat_period`.
+        """
+        return 2.0 * math.pi / abs(self.rate) if self.rate != 0.0 else None
 
     def describe(self):
         """One-line human description (angles in degrees)."""
@@ -317,6 +388,30 @@ class HeadingHistory(Motion):
         """True if every sampled heading equals the first."""
         return bool(np.all(self.headings == self.headings[0]))
 
+    def constant_rate(self, a, b):
+        """Constant within one sample interval of the history.
+
+        Arguments, returns and units as :meth:`Motion.constant_rate`.
+        """
+        i0 = np.searchsorted(self.times, a, side="right") - 1
+        i1 = np.searchsorted(self.times, b, side="left") - 1
+        return np.asarray(i1 <= i0)
+
+    def rate_bound(self, a, b):
+        """Largest heading rate of the sample intervals that overlap each ``[a_i, b_i]``.
+
+        Arguments, returns and units as :meth:`Motion.rate_bound`.
+        """
+        rates = np.abs(np.diff(self.headings) / np.diff(self.times))
+        # Running maximum over the sample intervals from the one holding a to the one holding b.
+        i0 = np.clip(np.searchsorted(self.times, a, side="right") - 1, 0, len(rates) - 1)
+        i1 = np.clip(np.searchsorted(self.times, b, side="left") - 1, 0, len(rates) - 1)
+        out = rates[i0].astype(float)
+        # Intervals spanning several samples (rare: pieces are cut at the samples).
+        for k in np.flatnonzero(np.atleast_1d(i1 > i0)):
+            out.flat[k] = rates[i0.flat[k] : i1.flat[k] + 1].max()
+        return out
+
     def pieces(self, duration):
         """The sample times inside the run: the rate is constant between them.
 
@@ -334,3 +429,108 @@ class HeadingHistory(Motion):
     def describe(self):
         """One-line human description."""
         return f"heading history of {len(self.times)} samples over {self.times[-1]:g} s"
+
+
+# ---------------------------------------------------------------------------------------
+# What the closed-loop planners may assume about a motion without sampling it at 100 Hz
+# ---------------------------------------------------------------------------------------
+# Only the motions defined above are known here; a planner given any other Motion
+# subclass (None below) samples it at the decision rate, as it always did.
+
+
+def heading_rate_bound(motion: Motion) -> float | None:
+    """Bound on the absolute heading rate at every time, so ``|H(t) - H(s)| <= bound |t - s|``.
+
+    Unlike :meth:`Motion.rate_bound` (a frequency bound that sizes the fast engine's
+    quadrature, swing frequency included) this is a bound on ``|H'|`` alone, and it
+    is None for motion types this module does not define, so that callers relying on
+    it fall back to sampling.
+
+    Parameters
+    ----------
+    motion : Motion
+        Vehicle motion.
+
+    Returns
+    -------
+    float or None
+        The bound, rad/s (the least one for these motions); None for a motion type
+        not defined in this module.
+    """
+    kind = type(motion)
+    if kind is Motion:
+        return 0.0
+    if kind is YawSwing:
+        return abs(motion.amplitude)
+    if kind is Turn:
+        return abs(motion.rate)
+    if kind is HeadingHistory:
+        # Linear between samples and held outside them (heading_at interpolates).
+        return float(np.max(np.abs(np.diff(motion.headings) / np.diff(motion.times))))
+    return None
+
+
+def heading_accel_bound(motion: Motion) -> float | None:
+    """Bound on ``|H''|`` at every time, for motions whose heading rate is continuous.
+
+    Parameters
+    ----------
+    motion : Motion
+        Vehicle motion.
+
+    Returns
+    -------
+    float or None
+        The bound, rad/s^2; None for a heading history (its rate jumps at the
+        samples) or a motion type not defined in this module.
+    """
+    kind = type(motion)
+    if kind in (Motion, Turn):
+        return 0.0
+    if kind is YawSwing:
+        return abs(motion.amplitude) * 2.0 * math.pi / motion.period
+    return None
+
+
+def heading_rate_breaks(motion: Motion, level: float, t_end: float) -> np.ndarray | None:
+    """Times that split ``[0, t_end]`` into pieces on which ``heading_rate - level`` keeps one sign.
+
+    On each open interval between consecutive returned times (and before the first,
+    after the last) ``motion.heading_rate(t) - level`` is continuous and either
+    never zero or identically zero. The times are exact to round-off (a few ulp);
+    callers that sample the rate must allow a margin of a sample or so.
+
+    Parameters
+    ----------
+    motion : Motion
+        Vehicle motion.
+    level : float
+        Heading-rate level, rad/s.
+    t_end : float
+        End of the span of interest, s.
+
+    Returns
+    -------
+    ndarray or None
+        Sorted times in ``[0, t_end]``, s (possibly empty); None for a motion type not
+        defined in this module.
+    """
+    kind = type(motion)
+    if kind in (Motion, Turn):
+        return np.zeros(0)  # constant rate
+    if kind is HeadingHistory:
+        # heading_rate is constant between the samples, with a jump at each.
+        t = motion.times
+        return t[(t > 0.0) & (t <= t_end)]
+    if kind is YawSwing:
+        amp = motion.amplitude
+        if amp == 0.0 or abs(level) > abs(amp):
+            return np.zeros(0)
+        # A cos(w t) = level at w t = +-alpha + 2 pi n (a double root when |level| = |A|).
+        w = 2.0 * math.pi / motion.period
+        alpha = math.acos(max(-1.0, min(1.0, level / amp)))
+        n = np.arange(-1, math.floor(w * t_end / (2.0 * math.pi)) + 2)
+        t = np.sort(np.concatenate([2.0 * math.pi * n + alpha, 2.0 * math.pi * n - alpha]) / w)
+        t = t[(t >= 0.0) & (t <= t_end)]
+        return t[np.concatenate([[True], np.diff(t) > 0])] if len(t) else t  # double roots once
+    return None

@@ -6,10 +6,10 @@ defines and checks the grid; :mod:`inserr.sweep.runner` runs it on Dask,
 :mod:`inserr.sweep.store` keeps the per-point records of an output directory and
 :mod:`inserr.sweep.figures` draws the summary.
 
-Parameter syntax (``--param NAME=VALUES``)
-------------------------------------------
+Parameter syntax (``NAME=VALUES``: ``--param`` or ``sweep.parameters``)
+-----------------------------------------------------------------------
 ``NAME`` is either a scenario flag of ``inserr drift`` without its dashes
-(``stop``, ``rate``, ``gyro-bias``, ``lat``, ``hours``, ``scheme``, ``yaw-swing``, ...)
+(``stop``, ``rate``, ``gyro-bias``, ``lat``, ``duration``, ``scheme``, ``yaw-swing``, ...)
 or a dotted scenario key (``scheme.stop``, ``imu.gyro_bias``, ``motion.period``).
 
 ``VALUES`` is a comma-separated list of values, each written exactly as after
@@ -70,10 +70,12 @@ from typing import Any
 
 from inserr.core.errors import InputError
 from inserr.core.units import UNITS, parse_quantity
-from inserr.scenario.schema import SCHEMA, Scenario, all_keys
+from inserr.scenario.schema import SCHEMA, Scenario, all_keys, scenario_from_dict
 
-#: Kinds of scenario values that cannot be swept (lists of names, tables of steps).
-UNSWEEPABLE = ("list", "table-list")
+#: Kinds of scenario values that cannot be swept (lists, tables of steps, switches).
+UNSWEEPABLE = ("list", "int-list", "float-list", "table-list", "bool")
+#: The sections a drift analysis reads: only their keys change a sweep's results.
+SWEPT_SECTIONS = ("scenario", "site", "imu", "initial", "motion", "scheme", "output")
 
 _BRACKET = re.compile(r"^\[(?P<inner>[^\[\]]*)\]\s*(?P<unit>.*)$")
 
@@ -127,7 +129,7 @@ class Param:
         if self.key is None:
             return None, ""
         section, _, k = self.key.partition(".")
-        kind, _, _ = SCHEMA[section][k]
+        kind = SCHEMA[section][k].kind
         if kind in ("float", "int"):
             try:
                 return [float(v) for v in self.values], ""
@@ -350,13 +352,13 @@ def split_values(text: str, name: str) -> list[str]:
             depth += 1
             if depth > 1:
                 raise InputError(
-                    f"--param {name}", "nested brackets", "write e.g. [0.01,0.02,0.03]"
+                    f"sweep.parameters[{name}]", "nested brackets", "write e.g. [0.01,0.02,0.03]"
                 )
         elif ch == "]":
             depth -= 1
             if depth < 0:
                 raise InputError(
-                    f"--param {name}", "']' without '['", "write e.g. [0.01,0.02,0.03]"
+                    f"sweep.parameters[{name}]", "']' without '['", "write e.g. [0.01,0.02,0.03]"
                 )
         if ch == "," and depth == 0:
             items.append("".join(cur).strip())
@@ -364,19 +366,23 @@ def split_values(text: str, name: str) -> list[str]:
         else:
             cur.append(ch)
     if depth:
-        raise InputError(f"--param {name}", "unclosed '['", "write e.g. [0.01,0.02,0.03]")
+        raise InputError(f"sweep.parameters[{name}]", "unclosed '['", "write e.g. [0.01,0.02,0.03]")
     items.append("".join(cur).strip())
     if items == [""]:
-        raise InputError(f"--param {name}", "empty list of values", f"give e.g. {name}=V1,V2")
+        raise InputError(
+            f"sweep.parameters[{name}]", "empty list of values", f"give e.g. {name}=V1,V2"
+        )
     for v in items:
         if not v:
             raise InputError(
-                f"--param {name}", f"empty value in {text!r}", "remove the extra comma"
+                f"sweep.parameters[{name}]", f"empty value in {text!r}", "remove the extra comma"
             )
     dup = sorted({v for v in items if items.count(v) > 1})
     if dup:
         raise InputError(
-            f"--param {name}", f"duplicated value(s) {', '.join(dup)}", "list each value once"
+            f"sweep.parameters[{name}]",
+            f"duplicated value(s) {', '.join(dup)}",
+            "list each value once",
         )
     return items
 
@@ -388,7 +394,7 @@ def _unbracket(value: str, name: str) -> str:
     m = _BRACKET.match(value)
     if not m:
         raise InputError(
-            f"--param {name}",
+            f"sweep.parameters[{name}]",
             f"cannot read {value!r}",
             "write [x,y,z] followed by an optional unit",
         )
@@ -432,44 +438,63 @@ def parse_param(text: str) -> Param:
         Missing ``=``, unknown name, a key that cannot be swept, empty or
         duplicated values, malformed brackets.
     """
-    from inserr.scenario.flags import FLAGS, YAW_SWING, flags_to_dict
+    from inserr.scenario.flags import FLAGS, dest, flags_to_dict
 
     name, eq, rest = text.partition("=")
     name = name.strip().removeprefix("--")
     if not eq or not name:
         raise InputError(
-            "--param", f"expected NAME=V1,V2,..., got {text!r}", "e.g. --param stop=60,300"
+            "sweep.parameters", f"expected NAME=V1,V2,..., got {text!r}", "e.g. stop=60,300"
         )
+    field_ = f"sweep.parameters[{name}]"
     values = split_values(rest, name)
     if "." in name:
         section, _, k = name.partition(".")
         if section not in SCHEMA or k not in SCHEMA[section]:
             raise InputError(
-                f"--param {name}", "unknown scenario key", f"use one of: {', '.join(all_keys())}"
+                field_, "unknown scenario key", f"use one of: {', '.join(sweepable_keys())}"
             )
-        kind = SCHEMA[section][k][0]
-        if kind in UNSWEEPABLE:
+        spec = SCHEMA[section][k]
+        if not _sweepable(name):
             raise InputError(
-                f"--param {name}", "this key cannot be swept", "sweep a scalar or x,y,z key"
+                field_,
+                "this key cannot be swept",
+                "sweep a scalar or x,y,z key the drift analysis reads",
             )
-        changes = tuple({name: _raw_value(kind, _unbracket(v, name), name)} for v in values)
+        changes = tuple({name: _raw_value(spec.kind, _unbracket(v, name), name)} for v in values)
         return Param(name, tuple(values), changes, name)
-    if name not in FLAGS and name != YAW_SWING:
+    flag = FLAGS.get(name)
+    if flag is None or not all(_sweepable(key) for key in flag.keys):
         raise InputError(
-            f"--param {name}",
+            field_,
             "unknown parameter",
             "use a flag name of inserr drift (e.g. stop, rate, gyro-bias, lat, scheme) "
             "or a dotted scenario key (e.g. scheme.stop)",
         )
     changes = []
     for v in values:
-        ns = argparse.Namespace(**{name.replace("-", "_"): _unbracket(v, name)})
+        ns = argparse.Namespace(**{dest(name): _unbracket(v, name)})
         try:
-            changes.append(_flatten(flags_to_dict(ns)))
+            changes.append(_flatten(flags_to_dict(ns, [name])))
         except InputError as exc:
-            raise InputError(f"--param {name}", f"value {v!r}: {exc.problem}", exc.fix) from None
-    key, unit = (FLAGS[name][0], FLAGS[name][1]) if name in FLAGS else (None, None)
-    return Param(name, tuple(values), tuple(changes), key, unit)
+            raise InputError(field_, f"value {v!r}: {exc.problem}", exc.fix) from None
+    if len(flag.keys) > 1:  # yaw-swing: AMP,PERIOD (and the motion type)
+        return Param(name, tuple(values), tuple(changes), None, None)
+    return Param(name, tuple(values), tuple(changes), flag.keys[0], flag.unit)
+
+
+def _sweepable(key: str) -> bool:
+    """A key of the drift analysis holding one value or one x,y,z (or six) value."""
+    section, _, k = key.partition(".")
+    if section not in SWEPT_SECTIONS:
+        return False
+    spec = SCHEMA[section][k]
+    return spec.kind not in UNSWEEPABLE and spec.size != "list"
+
+
+def sweepable_keys() -> list[str]:
+    """Every dotted key a sweep may vary."""
+    return [k for k in all_keys() if _sweepable(k)]
 
 
 def _raw_value(kind: str, text: str, name: str) -> Any:
@@ -480,7 +505,7 @@ def _raw_value(kind: str, text: str, name: str) -> Any:
         if kind == "int":
             return int(text)
     except ValueError:
-        raise InputError(f"--param {name}", f"{text!r} is not a number") from None
+        raise InputError(f"sweep.parameters[{name}]", f"{text!r} is not a number") from None
     return text
 
 
@@ -553,7 +578,7 @@ def referenced_files(base: Scenario, changes: dict[str, Any]) -> list[Path]:
         ``motion.file`` is set), resolved as :mod:`inserr.scenario.schema` does.
     """
     motion = base.raw.get("motion", {})
-    kind = changes.get("motion.type", motion.get("type", SCHEMA["motion"]["type"][2]))
+    kind = changes.get("motion.type", motion.get("type", SCHEMA["motion"]["type"].default))
     name = changes.get("motion.file", motion.get("file", ""))
     if kind != "heading-history" or not name:
         return []
@@ -563,8 +588,8 @@ def referenced_files(base: Scenario, changes: dict[str, Any]) -> list[Path]:
     return [path.resolve()]
 
 
-def build_grid(base: Scenario, param_texts: list[str]) -> Grid:
-    """Parse and validate the ``--param`` texts into a :class:`Grid` over ``base``.
+def build_grid(base: Scenario, param_texts: list[str] | None = None) -> Grid:
+    """Parse and validate the swept parameters into a :class:`Grid` over ``base``.
 
     Every point's scenario is built here (cheap next to its analysis) so that bad
     input is reported before any work starts.
@@ -572,9 +597,12 @@ def build_grid(base: Scenario, param_texts: list[str]) -> Grid:
     Parameters
     ----------
     base : Scenario
-        The scenario every point changes.
-    param_texts : list of str
-        The ``--param NAME=V1,V2,...`` arguments, in order (the last varies fastest).
+        The scenario every point changes; its ``sweep.parameters`` are the
+        parameters unless ``param_texts`` is given. The grid's base is ``base``
+        without its ``[sweep]`` section, so that a point keeps its identity when
+        parameters are added.
+    param_texts : list of str, optional
+        ``NAME=V1,V2,...`` texts, in order (the last varies fastest).
 
     Returns
     -------
@@ -586,20 +614,25 @@ def build_grid(base: Scenario, param_texts: list[str]) -> Grid:
         Bad syntax, unknown name, empty list, a parameter given twice, two
         parameters setting the same key, or a value that is invalid in every point.
     """
+    if param_texts is None:
+        param_texts = list(base.value("sweep.parameters"))
+    if "sweep" in base.raw:
+        raw = {k: v for k, v in base.raw.items() if k != "sweep"}
+        base = scenario_from_dict(raw, base.base_dir, study=base.study, analysis=base.analysis)
     if not param_texts:
-        raise InputError("--param", "nothing to sweep", "give at least one --param NAME=V1,V2")
+        raise InputError("sweep.parameters", "nothing to sweep", "give at least one NAME=V1,V2")
     params = tuple(parse_param(t) for t in param_texts)
     seen: dict[str, str] = {}
     for p in params:
         if p.name in seen.values():
             raise InputError(
-                f"--param {p.name}", "given twice", "merge the values into one --param"
+                f"sweep.parameters[{p.name}]", "given twice", "merge the values into one parameter"
             )
         for key in {k for ch in p.changes for k in ch}:
             if key in seen:
                 raise InputError(
-                    f"--param {p.name}",
-                    f"sets {key}, which --param {seen[key]} already sets",
+                    f"sweep.parameters[{p.name}]",
+                    f"sets {key}, which {seen[key]} already sets",
                     "drop one of them",
                 )
             seen[key] = p.name
@@ -635,7 +668,7 @@ def _reject_duplicate_points(params: tuple[Param, ...], points: list[Point]) -> 
             pairs = zip(first[pt.id].values, pt.values, strict=True)
             j = next(j for j, (a, b) in enumerate(pairs) if a != b)
             raise InputError(
-                f"--param {params[j].name}",
+                f"sweep.parameters[{params[j].name}]",
                 f"values {first[pt.id].values[j]!r} and {pt.values[j]!r} are the same",
                 "list each value once",
             )
@@ -649,7 +682,8 @@ def _reject_hopeless_values(params: tuple[Param, ...], points: list[Point]) -> N
             errors = [pt.error for pt in points if pt.values[j] == v]
             if errors and all(errors):
                 raise InputError(
-                    f"--param {p.name}", f"value {v!r} is invalid in every point: {errors[0]}"
+                    f"sweep.parameters[{p.name}]",
+                    f"value {v!r} is invalid in every point: {errors[0]}",
                 )
 
 

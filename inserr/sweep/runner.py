@@ -306,7 +306,7 @@ class ClusterEngine:
                 self.client = Client(scheduler, timeout="10s", set_as_default=False)
             except (OSError, TimeoutError, ValueError) as exc:
                 raise InputError(
-                    "--scheduler",
+                    "scheduler",
                     f"cannot connect to {scheduler!r} ({exc})",
                     "start the cluster (e.g. dask scheduler / dask worker) or check the address",
                 ) from None
@@ -388,20 +388,22 @@ def open_engine(scheduler: Any = None, workers: int | None = None) -> LocalEngin
     if workers is not None and (
         isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
     ):
-        raise InputError("--workers", f"must be an integer >= 1, got {workers!r}")
+        raise InputError("workers", f"must be an integer >= 1, got {workers!r}")
     if scheduler is None or scheduler in LOCAL_SCHEDULERS:
         n = workers or default_workers()
         name = scheduler or ("processes" if n > 1 else "sync")
         return LocalEngine(name, 1 if name == "sync" else n)
     if isinstance(scheduler, str) and "://" not in scheduler and ":" not in scheduler:
         raise InputError(
-            "--scheduler",
+            "scheduler",
             f"unknown scheduler {scheduler!r}",
             f"give a cluster address tcp://HOST:PORT or one of: {', '.join(LOCAL_SCHEDULERS)}",
         )
     if workers is not None:
         raise InputError(
-            "--workers", "does not apply to a cluster (its workers do the work)", "drop --workers"
+            "workers",
+            "does not apply to a cluster (its workers do the work)",
+            "give no worker count",
         )
     return ClusterEngine(scheduler)
 

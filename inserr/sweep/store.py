@@ -49,7 +49,7 @@ FIGURE_MARK = ("inserr", "sweep figure")
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
-def check_sweep_dir(out_dir: str | Path, field: str = "--out") -> Path:
+def check_sweep_dir(out_dir: str | Path, field: str = "out") -> Path:
     """Check, before any work, that ``out_dir`` can hold this sweep.
 
     A sweep writes ``sweep.json``, ``results.csv``, ``points/`` and its figures into
@@ -62,7 +62,7 @@ def check_sweep_dir(out_dir: str | Path, field: str = "--out") -> Path:
     out_dir : str or Path
         The sweep directory asked for.
     field : str
-        Flag named in the error message.
+        Name of the argument in the error message.
 
     Returns
     -------

@@ -1,0 +1,1101 @@
+"""Fast exact propagation of constant IMU errors and white noise at a fixed site.
+
+The step-by-step engine (:mod:`inserr.model.exact_propagation`) carries the IMU
+errors as states resolved in n and multiplies a 33 x 33 transition per step; under
+a swinging base every step differs, which costs seconds per 72 h. This engine uses
+the structure of the problem instead (``docs/theory.md``, "The fast engine"):
+
+1. **Time-invariant navigation dynamics.** At a fixed site with zero velocity the
+   navigation-error block ``F`` is constant, so in its eigenbasis
+   (:class:`~inserr.model.modal.NavModes`) every mode is a scalar equation
+   ``z' = lambda z + u_m(t)`` solved by ``z(t) = e^{lambda (t - a)} z(a) +
+   int_a^t e^{lambda (t - s)} u_m(s) ds``.
+2. **The attitude only enters the input.** A constant IMU-frame error projects into
+   n through ``C_s^n(t)``: a gyro bias ``b`` drives ``psi' = -C b``, a gyro error
+   matrix ``K`` drives ``psi' = -C K w_is^s`` with the true IMU rate
+   ``w_is^s = C^T (Omega + w_ns^n)``; accelerometer errors drive ``dv' = C b_a`` and
+   ``dv' = C K_a f^s`` with ``f^s = C^T f^n``. Every unit source's input is one of the
+   63 *features* ``C[a, i]``, ``C[a, i] w_is^s[j]``, ``C[a, i] f^s[j]`` times a constant,
+   so the 24 IMU sources cost one weighted time integral of 63 functions.
+3. **Quadrature where the attitude is smooth.** The history is split into windows
+   inside which ``C_s^n(t)`` is analytic (a stop, a turn, a stretch of a swing: see
+   :class:`~inserr.model.attitude_history.Pieces`), short enough that the integrand's
+   phase (twice the turn-rate bound, for the products of two attitude matrices, plus
+   the fastest mode) stays within :data:`~inserr.model.quadrature.MAX_PHASE`; each
+   window is sampled at Chebyshev points and integrated by Fejér's rule, and the
+   fine output times inside it by integrating the interpolant
+   (:mod:`inserr.model.quadrature`). Where the attitude is constant the integrals are
+   closed forms (``int_0^L e^{lambda s} ds = L phi_1(lambda L)``).
+4. **Scans, not steps.** The window-to-window recursion
+   ``z_{k+1} = e^{lambda L_k} z_k + d_k`` is evaluated for all windows at once as
+   ``z_k = e^{lambda s_k} (z_0 + sum_i e^{-lambda s_i} d_i)``, in blocks where a
+   growing (free vertical channel) mode would overflow.
+5. **White noise in closed form.** ARW and VRW drive the navigation states through
+   an attitude-independent (isotropic) input, so the covariance is
+   ``P(t) = V [M o Xi(t)] V^H`` with ``M = V^-1 B Q B^T V^-H`` and
+   ``Xi_ij(t) = t phi_1((lambda_i + conj(lambda_j)) t)``.
+
+Given a :class:`~inserr.model.attitude_history.TimelineHistory`, the engine solves
+exactly the piecewise-constant-rate problem of the step-by-step engine and the two
+agree to round-off (``tests/test_fast_propagation.py``); given the composed schedule
+(:class:`inserr.schemes.composition.ScheduleHistory`) it integrates the true
+continuous motion without sub-steps.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from inserr.core.rotations import skew
+from inserr.model.attitude_history import AttitudeHistory, Pieces
+from inserr.model.modal import NavModes
+from inserr.model.psi_model import ErrorModel
+from inserr.model.quadrature import (
+    MAX_PHASE,
+    chebyshev_points,
+    fejer_weights,
+    integral_of_series,
+    integration_matrix,
+    points_for,
+)
+from inserr.model.quadrature import _coefficient_matrix as coefficient_matrix
+
+#: Nodes evaluated at once (bounds memory: ~63 features and R modal weights per node).
+CHUNK_NODES = 40_000
+#: Samples of a constant-rate window: the features are trigonometric polynomials of
+#: degree 2 in the turn angle, which 5 equally spaced angles determine exactly.
+ROTATION_SAMPLES = 5
+#: Fine output times evaluated at once (bounds memory on long runs).
+CHUNK_FINE = 200_000
+#: Largest |Re lambda| * time span of one scan block (keeps exp() within float range).
+SCAN_SPAN = 200.0
+#: Window boundaries closer than this (s) are merged.
+MERGE = 1e-9
+
+#: Feature layout of one node: C[a, i] (9), C[a, i] w[j] (27), C[a, i] f[j] (27).
+N_FEATURES = 63
+
+
+def phi1(z: np.ndarray) -> np.ndarray:
+    """``(e^z - 1) / z`` (1 at z = 0), accurate for small and complex ``z``."""
+    z = np.asarray(z)
+    zero = z == 0
+    if not np.any(zero):
+        return np.expm1(z) / z
+    zz = np.where(zero, 1.0, z)
+    out = np.expm1(zz) / zz
+    out[zero] = 1.0
+    return out
+
+
+class _OffsetTable:
+    """``e^{lambda dt}`` and ``dt phi1(lambda dt)`` for many offsets ``dt`` (s).
+
+    Offsets on a grid ``k h`` (fine times inside windows that start on the fine grid)
+    are looked up in a table of the grid's multiples; the others are computed.
+    """
+
+    def __init__(self, lam: np.ndarray, dt: np.ndarray, h: float | None):
+        self.lam, self.dt = lam, dt
+        self.k = None
+        if h is not None and len(dt):
+            k = np.rint(dt / h).astype(np.int64)
+            on_grid = np.abs(dt - k * h) <= 1e-9 * np.maximum(1.0, dt)
+            if np.all(on_grid) and k.max() <= 1_000_000:
+                self.k = k
+                grid = np.arange(k.max() + 1) * h
+                self._exp = np.exp(lam[None, :] * grid[:, None])
+                self._phi = grid[:, None] * phi1(lam[None, :] * grid[:, None])
+
+    def exp(self, sel: np.ndarray) -> np.ndarray:
+        """``e^{lambda dt}`` at the offsets ``sel`` (index array), (len(sel), R)."""
+        if self.k is not None:
+            return self._exp[self.k[sel]]
+        return np.exp(self.lam[None, :] * self.dt[sel, None])
+
+    def phi(self, sel: np.ndarray) -> np.ndarray:
+        """``dt phi1(lambda dt)`` at the offsets ``sel``, (len(sel), R)."""
+        if self.k is not None:
+            return self._phi[self.k[sel]]
+        d = self.dt[sel, None]
+        return d * phi1(self.lam[None, :] * d)
+
+
+# ---------------------------------------------------------------------------------------
+# The error sources as the engine sees them
+# ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SourceSet:
+    """Constant error sources split into IMU errors (inputs) and initial errors (states).
+
+    Attributes
+    ----------
+    imu_kind : (N,) int
+        Per source: 0 gyro bias, 1 accelerometer bias, 2 gyro error-matrix entry,
+        3 accelerometer error-matrix entry, -1 initial navigation error.
+    imu_i, imu_j : (N,) int
+        Axis (bias: i) or matrix entry (i, j) in the IMU frame.
+    x0 : (9, N)
+        Initial navigation state of each initial-error source (zero columns for IMU
+        sources), psi (rad), dv (m/s), dr (m), ENU, per unit value.
+    value : (N,)
+        Signed magnitudes, SI.
+    """
+
+    imu_kind: np.ndarray
+    imu_i: np.ndarray
+    imu_j: np.ndarray
+    x0: np.ndarray
+    value: np.ndarray
+
+    @property
+    def n(self) -> int:
+        """Number of sources."""
+        return len(self.value)
+
+    def signed(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Signed totals: gyro bias, accel bias (3,), gyro K, accel K (3, 3), initial x0 (9,)."""
+        bg, ba = np.zeros(3), np.zeros(3)
+        kg, ka = np.zeros((3, 3)), np.zeros((3, 3))
+        for kind, i, j, v in zip(self.imu_kind, self.imu_i, self.imu_j, self.value, strict=True):
+            if kind == 0:
+                bg[i] += v
+            elif kind == 1:
+                ba[i] += v
+            elif kind == 2:
+                kg[i, j] += v
+            elif kind == 3:
+                ka[i, j] += v
+        return bg, ba, kg, ka, self.x0 @ self.value
+
+
+# ---------------------------------------------------------------------------------------
+# Windows
+# ---------------------------------------------------------------------------------------
+STILL, CACHED, DIRECT, ROTATION = 0, 1, 2, 3
+
+
+@dataclass(frozen=True)
+class Windows:
+    """Intervals of smooth attitude, each inside one piece and one coarse output interval.
+
+    Attributes
+    ----------
+    a, b : (W,) s
+        Window ends.
+    piece : (W,) int
+        Piece of the history each window lies in.
+    n : (W,) int
+        Chebyshev points of each window.
+    kind : (W,) int
+        :data:`STILL` (constant attitude: closed forms), :data:`ROTATION` (constant
+        angular velocity: the input is a trigonometric polynomial, closed forms too),
+        :data:`CACHED` (table fixed on a periodic vehicle, a whole phase step: the
+        vehicle part is integrated once per phase) or :data:`DIRECT` (attitude sampled
+        at the window's own points).
+    phase : (W,) int
+        Phase index of a cached window (its start is ``phase * step`` modulo the
+        vehicle period), -1 otherwise.
+    coarse : (W,) int
+        Index ``j`` of the coarse output time ``t_c[j]`` that ends the window's coarse
+        interval ``(t_c[j-1], t_c[j]]``.
+    """
+
+    a: np.ndarray
+    b: np.ndarray
+    piece: np.ndarray
+    n: np.ndarray
+    kind: np.ndarray
+    phase: np.ndarray
+    coarse: np.ndarray
+
+
+def _is_multiple(x: float, y: float) -> bool:
+    q = x / y
+    return round(q) >= 1 and abs(q - round(q)) < 1e-9
+
+
+def _cacheable(pieces: Pieces) -> np.ndarray:
+    """Pieces whose attitude is a function of the vehicle phase (and not a closed form)."""
+    if pieces.phase_class is None:
+        return np.zeros(len(pieces.still), dtype=bool)
+    constant = pieces.constant if pieces.constant is not None else False
+    return (pieces.phase_class >= 0) & ~pieces.still & ~constant
+
+
+def phase_step(pieces: Pieces, t_coarse: np.ndarray, dt_fine: float | None, fastest: float):
+    """Step of the phase grid on which the vehicle part is reused, or None.
+
+    The step divides the vehicle period and keeps a window's phase within
+    :data:`~inserr.model.quadrature.MAX_PHASE`. Among such steps, preferably one that
+    divides the coarse step (coarse times then never cut a phase window) and is a
+    multiple of the fine output step (fine times then sit at the same offsets in
+    every window, and their integrals are tabulated once).
+    """
+    period = pieces.vehicle_period
+    if period is None or pieces.phase_class is None:
+        return None
+    fixed = _cacheable(pieces)
+    if not np.any(fixed):
+        return None
+    rate = 2.0 * float(pieces.bandwidth[fixed].max()) + fastest
+    m_min = max(1, int(np.ceil(period * rate / MAX_PHASE)))
+    dt_c = float(t_coarse[1] - t_coarse[0]) if len(t_coarse) > 1 else period
+
+    def score(m: int) -> int:
+        g = period / m
+        fine = dt_fine is not None and _is_multiple(g, dt_fine)
+        return 2 * int(_is_multiple(dt_c, g)) + int(fine)
+
+    candidates = range(m_min, m_min + 400)
+    best = max(candidates, key=lambda m: (score(m), -m))
+    return period / best
+
+
+def fine_aligned(step: float | None, dt_fine: float | None) -> bool:
+    """Whether fine output times fall at the same offsets in every phase window."""
+    return step is not None and dt_fine is not None and _is_multiple(step, dt_fine)
+
+
+def make_windows(
+    pieces: Pieces, t_coarse: np.ndarray, fastest_mode: float, step: float | None = None
+) -> Windows:
+    """Cut the history at its piece boundaries, the coarse times and the phase grid.
+
+    Parameters
+    ----------
+    pieces : Pieces
+        Smooth pieces of the attitude history.
+    t_coarse : (Mc,) s
+        Coarse output times (0 and the end included).
+    fastest_mode : float, 1/s
+        Largest ``|lambda|`` of the navigation modes (adds to the integrand's phase).
+    step : float, optional
+        Phase step of :func:`phase_step` (None: no reuse of the vehicle part).
+
+    Returns
+    -------
+    Windows
+    """
+    end = float(pieces.breaks[-1])
+    extra = [t_coarse[(t_coarse > 0) & (t_coarse < end)]]
+    if step is not None:
+        extra.append(np.arange(1, int(np.floor(end / step)) + 1) * step)
+    cuts = np.unique(np.concatenate([pieces.breaks, *extra]))
+    cuts = cuts[(cuts >= 0) & (cuts <= end)]
+    cuts = cuts[np.concatenate([[True], np.diff(cuts) > MERGE])]
+    cuts[-1] = end
+    a, b = cuts[:-1], cuts[1:]
+    mid = 0.5 * (a + b)
+    piece = np.clip(np.searchsorted(pieces.breaks, mid, side="right") - 1, 0, len(pieces.still) - 1)
+    constant = pieces.constant[piece] if pieces.constant is not None else np.zeros(len(a), bool)
+    kind = np.where(pieces.still[piece], STILL, np.where(constant, ROTATION, DIRECT))
+    phase = np.full(len(a), -1)
+    if step is not None:
+        fixed = _cacheable(pieces)[piece] & (kind == DIRECT)
+        k = np.round(a / step).astype(int)
+        whole = (
+            fixed
+            & (np.abs(a - k * step) < 1e3 * MERGE)
+            & (np.abs(b - (k + 1) * step) < 1e3 * MERGE)
+        )
+        m = int(round(pieces.vehicle_period / step))
+        kind = np.where(whole, CACHED, kind)
+        phase = np.where(whole, k % m, -1)
+    # Products of two attitude matrices oscillate at twice the turn rate.
+    rate = 2.0 * pieces.bandwidth[piece] + fastest_mode
+    ph = np.where(kind == DIRECT, rate * (b - a), 0.0)
+    parts = np.maximum(1, np.ceil(ph / MAX_PHASE)).astype(int)
+    if np.any(parts > 1):
+        rep = np.repeat(np.arange(len(a)), parts)
+        j = np.arange(len(rep)) - np.repeat(np.cumsum(parts) - parts, parts)
+        length = (b - a)[rep] / parts[rep]
+        a2 = a[rep] + j * length
+        b2 = np.where(j == parts[rep] - 1, b[rep], a2 + length)
+        a, b, piece, kind, phase, ph = a2, b2, piece[rep], kind[rep], phase[rep], (ph / parts)[rep]
+    n = np.where(kind == DIRECT, points_for(ph), np.where(kind == ROTATION, ROTATION_SAMPLES, 1))
+    if np.any(kind == CACHED):
+        # One template for every phase: sized by the largest bandwidth of a cached piece.
+        fixed = _cacheable(pieces)
+        cached_phase = (2.0 * float(pieces.bandwidth[fixed].max()) + fastest_mode) * step
+        n = np.where(kind == CACHED, points_for(np.array([cached_phase]))[0], n)
+    coarse = np.searchsorted(t_coarse, b - MERGE, side="left")
+    return Windows(a, b, piece, n.astype(int), kind, phase, coarse)
+
+
+# ---------------------------------------------------------------------------------------
+# Features
+# ---------------------------------------------------------------------------------------
+def _features(c: np.ndarray, w_is: np.ndarray, f_s: np.ndarray) -> np.ndarray:
+    """(N, 63): ``C[a, i]``, ``C[a, i] w_is[j]``, ``C[a, i] f_s[j]`` (row-major a, i, j)."""
+    nn = len(c)
+    out = np.empty((nn, N_FEATURES))
+    out[:, :9] = c.reshape(nn, 9)
+    out[:, 9:36] = (c[:, :, :, None] * w_is[:, None, None, :]).reshape(nn, 27)
+    out[:, 36:] = (c[:, :, :, None] * f_s[:, None, None, :]).reshape(nn, 27)
+    return out
+
+
+def vehicle_to_imu(y: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Vehicle features (of ``C_b^n``, ``w^b``, ``f^b``) -> IMU features for a fixed table ``m``.
+
+    With the table at ``C_s^b = M``: ``C = C_b^n M``, ``w_is^s = M^T w^b``,
+    ``f^s = M^T f^b``, so ``C[a, i] = sum_k C_b^n[a, k] M[k, i]`` and
+    ``C[a, i] w^s[j] = sum_kl C_b^n[a, k] w^b[l] M[k, i] M[l, j]``; linear, so it applies
+    to integrals of features as well.
+
+    Parameters
+    ----------
+    y : (B, ..., 63)
+        Vehicle features or their integrals; every entry ``y[b]`` is seen through the
+        table ``m[b]``.
+    m : (B, 3, 3) or (3, 3)
+        ``C_s^b`` of the fixed table.
+
+    Returns
+    -------
+    ndarray, shape of ``y``
+    """
+    m = np.asarray(m, dtype=float)
+    if m.ndim == 2:
+        m = m[None]
+        y = y[None]
+        squeeze = True
+    else:
+        squeeze = False
+    nb = len(m)
+    rows = y.shape[1:-1]
+    nr = int(np.prod(rows, dtype=int))
+    yy = np.ascontiguousarray(y).reshape(nb, nr, N_FEATURES)
+    # kron(M, M)[(k, l), (i, j)] = M[k, i] M[l, j]
+    mk = (m[:, :, None, :, None] * m[:, None, :, None, :]).reshape(nb, 9, 9)
+    out = np.empty((nb, nr, N_FEATURES), dtype=np.result_type(y, m))
+    # C[a, i] = sum_k C_b^n[a, k] M[k, i]: rows (r, a) times M.
+    out[:, :, :9] = (yy[:, :, :9].reshape(nb, nr * 3, 3) @ m).reshape(nb, nr, 9)
+    for lo in (9, 36):
+        # C[a, i] x[j] = sum_kl C_b^n[a, k] x^b[l] M[k, i] M[l, j]: rows (r, a) times kron(M, M).
+        blk = yy[:, :, lo : lo + 27].reshape(nb, nr * 3, 9)
+        out[:, :, lo : lo + 27] = (blk @ mk).reshape(nb, nr, 27)
+    out = out.reshape((nb,) + rows + (N_FEATURES,))
+    return out[0] if squeeze else out
+
+
+def signed_coefficients(modes: NavModes, src: SourceSet) -> np.ndarray:
+    """(R, 63): modal input of the signed errors as a linear form in the IMU features."""
+    bg, ba, kg, ka, _ = src.signed()
+    g, acc = modes.gyro_input, modes.accel_input  # (R, 3)
+    out = np.zeros((modes.n_modes, N_FEATURES), dtype=complex)
+    out[:, :9] = (g[:, :, None] * bg[None, None, :] + acc[:, :, None] * ba[None, None, :]).reshape(
+        -1, 9
+    )
+    out[:, 9:36] = (g[:, :, None, None] * kg[None, None]).reshape(-1, 27)
+    out[:, 36:] = (acc[:, :, None, None] * ka[None, None]).reshape(-1, 27)
+    return out
+
+
+def _source_inputs(modes: NavModes, y: np.ndarray, src: SourceSet) -> np.ndarray:
+    """Modal inputs (J, R, N) of every source from feature integrals ``y`` (J, R, 63).
+
+    A gyro bias on IMU axis i drives ``psi' = -C e_i``, whose modal input is
+    ``sum_a G[r, a] C[a, i]`` (G = :attr:`NavModes.gyro_input`); a gyro error-matrix
+    entry (i, j) drives ``-C e_i w_is[j]``; accelerometer errors likewise with
+    :attr:`NavModes.accel_input` and ``f^s``.
+    """
+    g, acc = modes.gyro_input, modes.accel_input  # (R, 3): n-frame error -> modal input
+    nj, r = y.shape[0], y.shape[1]
+    y1 = y[:, :, :9].reshape(nj, r, 3, 3)  # [j, r, a, i]
+    y2 = y[:, :, 9:36].reshape(nj, r, 3, 9)  # [j, r, a, (i, k)]
+    y3 = y[:, :, 36:].reshape(nj, r, 3, 9)
+    g1 = np.einsum("ra,jrai->jri", g, y1)
+    a1 = np.einsum("ra,jrai->jri", acc, y1)
+    g2 = np.einsum("ra,jrap->jrp", g, y2)
+    a3 = np.einsum("ra,jrap->jrp", acc, y3)
+    table = np.concatenate([g1, a1, g2, a3], axis=2)  # (J, R, 3 + 3 + 9 + 9)
+    col = np.select(
+        [src.imu_kind == 0, src.imu_kind == 1, src.imu_kind == 2, src.imu_kind == 3],
+        [src.imu_i, 3 + src.imu_i, 6 + 3 * src.imu_i + src.imu_j, 15 + 3 * src.imu_i + src.imu_j],
+        default=-1,
+    )
+    out = np.zeros((nj, r, src.n), dtype=complex)
+    imu = col >= 0
+    out[:, :, imu] = table[:, :, col[imu]]
+    return out
+
+
+# ---------------------------------------------------------------------------------------
+# Scans
+# ---------------------------------------------------------------------------------------
+def scan(lam: np.ndarray, t0: float, z0: np.ndarray, t: np.ndarray, incr: np.ndarray) -> np.ndarray:
+    """States after each increment of ``z' = lambda z`` with jumps: ``z_k = e^{lambda (t_k -
+    t_{k-1})} z_{k-1} + incr_k``.
+
+    Parameters
+    ----------
+    lam : (R,) complex, 1/s
+    t0 : float, s
+        Time of ``z0``.
+    z0 : (R, ...) complex
+        State at ``t0``.
+    t : (K,) s
+        Increasing times of the increments (each already propagated to its own time).
+    incr : (K, R, ...) complex
+
+    Returns
+    -------
+    ndarray (K, R, ...)
+        States at ``t`` (the increment included).
+    """
+    out = np.empty(incr.shape, dtype=complex)
+    extra = (1,) * (incr.ndim - 2)
+    lam_b = lam.reshape((1, -1) + extra)
+    growth = float(np.max(np.abs(lam.real))) if len(lam) else 0.0
+    z, tz = np.asarray(z0, dtype=complex), t0
+    k = 0
+    while k < len(t):
+        # A block in which e^{-lambda (t - tz)} stays within floating-point range.
+        if growth > 0:
+            stop = int(np.searchsorted(t, tz + SCAN_SPAN / growth, side="right"))
+            stop = max(stop, k + 1)
+        else:
+            stop = len(t)
+        dt = (t[k:stop] - tz).reshape((-1, 1) + extra)
+        acc = np.cumsum(np.exp(-lam_b * dt) * incr[k:stop], axis=0)
+        out[k:stop] = np.exp(lam_b * dt) * (z[None] + acc)
+        z, tz = out[stop - 1], t[stop - 1]
+        k = stop
+    return out
+
+
+# ---------------------------------------------------------------------------------------
+# The engine
+# ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ConstantErrorResponse:
+    """Navigation errors due to constant errors (SI, ENU).
+
+    Attributes
+    ----------
+    t_fine : (M,) s
+    fine : (M, 9)
+        Response to all sources with their signed values, on the fine grid.
+    t_coarse : (Mc,) s
+    coarse : (Mc, 9, N)
+        Response to each source (scaled by its value), on the coarse grid.
+    windows : dict
+        Quadrature windows used, by kind (``still``, ``cached``, ``direct``).
+    nodes : int
+        Attitude evaluations used.
+    """
+
+    t_fine: np.ndarray
+    fine: np.ndarray
+    t_coarse: np.ndarray
+    coarse: np.ndarray
+    windows: dict
+    nodes: int
+
+
+def _grid_step(t: np.ndarray) -> float | None:
+    """Step of a uniform grid 0, h, 2h, ... (its last point may be shorter), else None."""
+    if len(t) < 2 or t[0] != 0.0:
+        return None
+    h = float(t[1] - t[0])
+    inner = t[:-1] if len(t) > 2 else t
+    return h if np.allclose(np.diff(inner), h, rtol=0, atol=1e-9) else None
+
+
+def constant_error_response(
+    model: ErrorModel,
+    history: AttitudeHistory,
+    sources: SourceSet,
+    t_fine: np.ndarray,
+    t_coarse: np.ndarray,
+) -> ConstantErrorResponse:
+    """Response of the navigation errors to constant IMU and initial errors.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        Site and vertical mode (its layout is not used: IMU errors are inputs here).
+    history : AttitudeHistory
+        ``C_s^n(t)`` and ``w_ns^n(t)`` over the run.
+    sources : SourceSet
+        The constant errors (values signed, SI).
+    t_fine : (M,) s
+        Output times of the signed response (increasing, within the run).
+    t_coarse : (Mc,) s
+        Output times of the per-source responses; must start at 0 and end at the
+        duration (they cut the quadrature windows).
+
+    Returns
+    -------
+    ConstantErrorResponse
+    """
+    # Many small and medium matrix products: a multi-threaded BLAS costs more than it
+    # saves here, and fights with the processes of a sweep.
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _constant_error_response(model, history, sources, t_fine, t_coarse)
+
+
+def _constant_error_response(model, history, sources, t_fine, t_coarse):
+    modes = NavModes(model)
+    lam = modes.lam
+    t_fine = np.asarray(t_fine, dtype=float)
+    t_coarse = np.asarray(t_coarse, dtype=float)
+    pieces = history.pieces()
+    fastest = float(np.max(np.abs(lam)))
+    step = phase_step(pieces, t_coarse, _grid_step(t_fine), fastest)
+    win = make_windows(pieces, t_coarse, fastest, step)
+    a_sig = signed_coefficients(modes, sources)
+    run = _Run(modes, history, pieces, win, t_coarse, a_sig, step, sources)
+    run.still_windows()
+    run.rotation_windows()
+    run.cached_windows()
+    run.direct_windows()
+    z0 = modes.to_modes(sources.signed()[4])
+    run.z_end = scan(lam, 0.0, z0, win.b, run.incr)
+    run.z_start = np.concatenate([z0[None], run.z_end[:-1]])
+
+    # Fine outputs in blocks (a 720 h run at 1 s has 2.6 million of them).
+    fine = np.empty((len(t_fine), 9))
+    h = _grid_step(t_fine)
+    for lo in range(0, len(t_fine), CHUNK_FINE):
+        tb = t_fine[lo : lo + CHUNK_FINE]
+        zb = np.empty((len(tb), modes.n_modes), dtype=complex)
+        at_zero = tb <= MERGE
+        zb[at_zero] = z0
+        inside = np.flatnonzero(~at_zero)
+        if len(inside):
+            zb[inside] = run.fine_states(tb[inside], h)
+        fine[lo : lo + len(tb)] = modes.to_nav(zb)
+
+    # Per source: modal inputs per coarse interval, then the scan over coarse intervals.
+    z_src0 = modes.to_modes(sources.x0, axis=0)  # (R, N)
+    coarse_z = np.empty((len(t_coarse), modes.n_modes, sources.n), dtype=complex)
+    coarse_z[0] = z_src0
+    if len(t_coarse) > 1:
+        inputs = run.inputs[1:]
+        coarse_z[1:] = scan(lam, float(t_coarse[0]), z_src0, t_coarse[1:], inputs)
+    coarse = modes.to_nav(coarse_z * sources.value[None, None, :], axis=1)
+    counts = {
+        name: int(np.count_nonzero(win.kind == k))
+        for name, k in (("still", STILL), ("cached", CACHED), ("direct", DIRECT))
+    }
+    return ConstantErrorResponse(t_fine, fine, t_coarse, coarse, counts, run.nodes)
+
+
+class _Run:
+    """Working state of one :func:`constant_error_response` call (windows by kind)."""
+
+    def __init__(self, modes, history, pieces, win, t_coarse, a_sig, step, sources):
+        self.modes, self.history, self.pieces, self.win = modes, history, pieces, win
+        self.t_coarse, self.a_sig, self.step = t_coarse, a_sig, step
+        self.lam = modes.lam
+        site = modes.model.site
+        self.earth, self.f_n = site.earth_rate_n, site.specific_force_n
+        nw, r = len(win.a), modes.n_modes
+        self.incr = np.zeros((nw, r), dtype=complex)  # signed increment to each window's end
+        # Modal input of every source per coarse interval (feature integrals are turned
+        # into source inputs as they arrive: N sources take less room than 63 features).
+        self.sources = sources
+        self.inputs = np.zeros((len(t_coarse), r, sources.n), dtype=complex)
+        self.u_still = np.zeros((nw, r), dtype=complex)  # constant input of still windows
+        self.direct_u: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self.cached_fine = None
+        self.nodes = 0
+
+    def _add_features(self, j: np.ndarray, y: np.ndarray) -> None:
+        """Add feature integrals ``y`` (K, R, 63) of coarse intervals ``j`` (distinct)."""
+        self.inputs[j] += _source_inputs(self.modes, y, self.sources)
+
+    # --- attitude at nodes ---------------------------------------------------------
+    def _imu_features(self, t, piece):
+        c, w_ns = self.history.evaluate(t, piece)
+        self.nodes += len(t)
+        w_is = np.einsum("nji,nj->ni", c, self.earth + w_ns)  # C^T (Omega + w): IMU frame
+        f_s = np.einsum("nji,j->ni", c, self.f_n)  # C^T f: IMU frame
+        return _features(c, w_is, f_s)
+
+    def _to_coarse(self, b: np.ndarray, j: np.ndarray) -> np.ndarray:
+        """``e^{lambda (t_c[j] - b)}``: propagation from a window end to its coarse time."""
+        return np.exp(self.lam[None, :] * (self.t_coarse[j] - b)[:, None])
+
+    # --- still windows: constant attitude, closed forms ---------------------------------
+    def still_windows(self) -> None:
+        win = self.win
+        idx = np.flatnonzero(win.kind == STILL)
+        if not len(idx):
+            return
+        length = win.b[idx] - win.a[idx]
+        feats = self._imu_features(0.5 * (win.a[idx] + win.b[idx]), win.piece[idx])
+        wt = length[:, None] * phi1(self.lam[None, :] * length[:, None])  # int_0^L e^{lambda s}
+        u = _apply_form(feats, self.a_sig)
+        self.u_still[idx] = u
+        self.incr[idx] = wt * u
+        w = wt * self._to_coarse(win.b[idx], win.coarse[idx])
+        jj, sums = _group_sum(win.coarse[idx], w[:, :, None] * feats[:, None, :])
+        self._add_features(jj, sums)
+
+    # --- rotation windows: constant angular velocity, closed forms ---------------------
+    def rotation_windows(self) -> None:
+        """Windows where ``C_s^n`` turns at a constant rate: harmonic closed forms.
+
+        With ``R(tau) = a a^T + cos(rho tau) (I - a a^T) + sin(rho tau) [a x]`` every
+        feature is ``sum_k F_k e^{i k rho tau}``, ``|k| <= 2`` (products of two attitude
+        matrices; ``C^T w`` is constant about the turn axis). Five equally spaced turn
+        angles give the ``F_k`` exactly (a discrete Fourier transform), and
+        ``int_0^L e^{lambda (L - tau)} e^{i nu tau} dtau = e^{lambda L} L phi1((i nu - lambda) L)``.
+        """
+        win, lam = self.win, self.lam
+        idx = np.flatnonzero(win.kind == ROTATION)
+        if not len(idx):
+            return
+        c_a, w = self.history.evaluate(win.a[idx], win.piece[idx])
+        self.nodes += len(idx)
+        rho = np.linalg.norm(w, axis=1)
+        axis = w / rho[:, None]
+        ks = np.arange(-2, 3)
+        theta = 2.0 * np.pi * np.arange(ROTATION_SAMPLES) / ROTATION_SAMPLES
+        kx = skew(axis)  # (W, 3, 3)
+        rot = (
+            np.eye(3)[None, None]
+            + np.sin(theta)[None, :, None, None] * kx[:, None]
+            + (1.0 - np.cos(theta))[None, :, None, None] * (kx @ kx)[:, None]
+        )  # (W, 5, 3, 3): the attitude after turning by theta_j
+        c = rot @ c_a[:, None]
+        w_is = np.einsum("wjba,wb->wja", c, self.earth + w)
+        f_s = np.einsum("wjba,b->wja", c, self.f_n)
+        feats = _features(c.reshape(-1, 3, 3), w_is.reshape(-1, 3), f_s.reshape(-1, 3))
+        feats = feats.reshape(len(idx), ROTATION_SAMPLES, N_FEATURES)
+        # F_k = (1/5) sum_j F(theta_j) e^{-i k theta_j}, k = -2..2
+        dft = np.exp(-1j * ks[:, None] * theta[None, :]) / ROTATION_SAMPLES  # (5 k, 5 j)
+        fk = np.einsum("kj,wjf->wkf", dft, feats)  # (W, 5, 63)
+        nu = ks[None, :] * rho[:, None]  # (W, 5) rad/s
+        length = win.b[idx] - win.a[idx]
+        # int_0^L e^{lambda (L - tau)} e^{i nu tau} dtau, per window, harmonic, mode.
+        zl = (1j * nu[:, :, None] - lam[None, None, :]) * length[:, None, None]
+        wt = (np.exp(lam[None, :] * length[:, None]) * length[:, None])[:, None, :] * phi1(zl)
+        uk = np.einsum("wkf,rf->wkr", fk, self.a_sig)  # signed input per harmonic
+        self.incr[idx] = np.einsum("wkr,wkr->wr", uk, wt)
+        j = win.coarse[idx]
+        to_c = self._to_coarse(win.b[idx], j)  # (W, R)
+        y = np.einsum("wkr,wkf->wrf", wt * to_c[:, None, :], fk)
+        jj, sums = _group_sum(j, y)
+        self._add_features(jj, sums)
+        self.rotation_uk = np.zeros((len(win.a), ROTATION_SAMPLES, len(lam)), dtype=complex)
+        self.rotation_uk[idx] = uk
+        self.rotation_nu = np.zeros((len(win.a), ROTATION_SAMPLES))
+        self.rotation_nu[idx] = nu
+
+    def _rotation_integrals(self, w: np.ndarray, dt: np.ndarray, h: float | None) -> np.ndarray:
+        """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine times of rotation windows."""
+        lam = self.lam
+        # int_0^d e^{(i nu - lambda) s} ds = d phi1((i nu - lambda) d), evaluated once per
+        # distinct (rate, offset) pair: fine times repeat the same offsets turn after turn.
+        rates, cls = np.unique(np.rint(self.rotation_nu[w, -1] * 1e12), return_inverse=True)
+        cls = cls.reshape(-1)
+        k = np.rint(dt / h).astype(np.int64) if h else None
+        if k is not None and np.all(np.abs(dt - k * h) <= 1e-9 * np.maximum(1.0, dt)):
+            span = int(k.max()) + 1
+            key = cls * span + k
+            d_key = (np.arange(len(rates) * span) % span) * h
+        else:
+            uniq_d, kd = np.unique(np.rint(dt * 1e9).astype(np.int64), return_inverse=True)
+            span = len(uniq_d)
+            key = cls * span + kd.reshape(-1)
+            d_key = np.tile(uniq_d * 1e-9, len(rates))
+        nu_key = np.repeat(rates * 1e-12 / 2.0, span)[:, None] * np.arange(-2, 3)[None, :]
+        used = np.unique(key)
+        d = d_key[used][:, None, None]
+        table = np.zeros((len(d_key), ROTATION_SAMPLES, len(lam)), dtype=complex)
+        table[used] = d * phi1((1j * nu_key[used][:, :, None] - lam[None, None, :]) * d)
+        return np.einsum("fkr,fkr->fr", self.rotation_uk[w], table[key])
+
+    # --- cached windows: table fixed, vehicle periodic --------------------------------
+    def cached_windows(self) -> None:
+        """Whole phase steps of pieces whose attitude depends on the vehicle phase only.
+
+        Class 0: the vehicle seen through a fixed table ``M`` (``C = C_b^n(t) M``): the
+        vehicle's own features are integrated once per phase and turned into IMU
+        features per table afterwards (:func:`vehicle_to_imu`). Classes >= 1: other
+        phase-periodic pieces (e.g. heading-isolation holds of one target heading):
+        their IMU features are sampled once per (class, phase) at a representative
+        window. Every window of a (class, phase, table) then costs a lookup.
+        """
+        win, step, lam = self.win, self.step, self.lam
+        idx = np.flatnonzero(win.kind == CACHED)
+        if not len(idx):
+            return
+        n = int(win.n[idx[0]])
+        m = int(round(self.pieces.vehicle_period / step))
+        x = chebyshev_points(n)
+        s = (x + 1.0) * 0.5 * step  # node offsets in a window
+        cls = self.pieces.phase_class[win.piece[idx]]
+        ph = win.phase[idx]
+        n_cls = int(cls.max()) + 1
+        fv = np.zeros((n_cls, m, n, N_FEATURES))
+        if np.any(cls == 0):
+            t = (np.arange(m)[:, None] * step + s[None, :]).ravel()
+            c_bn, w_nb = self.history.evaluate_vehicle(t)
+            self.nodes += len(t)
+            w_b = np.einsum("nji,nj->ni", c_bn, self.earth + w_nb)
+            f_b = np.einsum("nji,j->ni", c_bn, self.f_n)
+            fv[0] = _features(c_bn, w_b, f_b).reshape(m, n, N_FEATURES)
+        other = np.flatnonzero(cls > 0)
+        if len(other):
+            # One representative window per (class, phase) present.
+            cp, first = np.unique(cls[other] * m + ph[other], return_index=True)
+            rep = idx[other[first]]
+            t = (win.a[rep][:, None] + s[None, :]).ravel()
+            feats = self._imu_features(t, np.repeat(win.piece[rep], n))
+            fv[cp // m, cp % m] = feats.reshape(len(rep), n, N_FEATURES)
+        weight = fejer_weights(n) * 0.5 * step
+        # Integral over a window of phase p to its end: sum_q w_q e^{lambda (step - s_q)} F_pq.
+        wend = weight[:, None] * np.exp(lam[None, :] * (step - s)[:, None])  # (n, R)
+        y_phase = np.einsum("qr,cpqf->cprf", wend, fv)  # (C, m, R, 63)
+        self.cached_template = (n, s, fv)
+
+        # Tables: class 0 windows see their piece's table; the others the identity.
+        tables = np.where(
+            (cls == 0)[:, None, None], self.pieces.table[win.piece[idx]], np.eye(3)[None]
+        )
+        keys = np.round(tables.reshape(len(idx), 9), 12)
+        uniq, inv = np.unique(keys, axis=0, return_inverse=True)
+        inv = inv.reshape(-1)
+        mats = uniq.reshape(-1, 3, 3)
+        nt = len(mats)
+        # Signed input as a linear form in the template features, per table: A_M.
+        forms = _vehicle_forms(self.a_sig, mats)  # (T, R, 63)
+        # Signed increment of every (class, phase, table): per mode one product.
+        inc = np.empty((n_cls, m, nt, len(lam)), dtype=complex)
+        for r in range(len(lam)):
+            inc[:, :, :, r] = (
+                y_phase[:, :, r, :].reshape(-1, N_FEATURES) @ forms[:, r, :].T
+            ).reshape(n_cls, m, nt)
+        self.incr[idx] = inc[cls, ph, inv]
+        # Per source: the windows of one (coarse interval, class, table) group add up to
+        # sum_p c[group, p, r] y_phase[class, p, r, :], with c the summed propagation
+        # factors e^{lambda (t_c - b)} of the group's windows of phase p; then one
+        # transform per group.
+        j = win.coarse[idx]
+        w = self._to_coarse(win.b[idx], j)  # (K, R)
+        groups, group_of = np.unique((j * n_cls + cls) * nt + inv, return_inverse=True)
+        cell = group_of.reshape(-1) * m + ph
+        size = len(groups) * m
+        coef = np.empty((size, len(lam)), dtype=complex)
+        for r in range(len(lam)):
+            coef[:, r] = np.bincount(cell, w[:, r].real, size) + 1j * np.bincount(
+                cell, w[:, r].imag, size
+            )
+        coef = coef.reshape(len(groups), m, len(lam))
+        g_table = groups % nt
+        g_class = (groups // nt) % n_cls
+        g_j = groups // (nt * n_cls)
+        # In blocks of groups (long runs have tens of thousands of coarse intervals).
+        for lo in range(0, len(groups), 4096):
+            blk = slice(lo, lo + 4096)
+            sums = np.empty((len(groups[blk]), len(lam), N_FEATURES), dtype=complex)
+            for c in np.unique(g_class[blk]):
+                sel = np.flatnonzero(g_class[blk] == c)
+                for r in range(len(lam)):
+                    sums[sel, r, :] = coef[blk][sel, :, r] @ y_phase[c, :, r, :]
+            acc_imu = vehicle_to_imu(sums, mats[g_table[blk]])
+            jj, sums_j = _group_sum(g_j[blk], acc_imu)
+            self._add_features(jj, sums_j)
+        self.cached_forms = forms
+        self.cached_table = np.full(len(win.a), -1)
+        self.cached_table[idx] = inv
+        self.cached_class = np.full(len(win.a), -1)
+        self.cached_class[idx] = cls
+
+    # --- direct windows: attitude sampled at each window's points ----------------------
+    def direct_windows(self) -> None:
+        win, lam = self.win, self.lam
+        idx = np.flatnonzero(win.kind == DIRECT)
+        if not len(idx):
+            return
+        # Node times and signed inputs of every direct window, kept for the fine outputs.
+        self.direct_first = np.full(len(win.a), -1)
+        self.direct_first[idx] = np.concatenate([[0], np.cumsum(win.n[idx])[:-1]])
+        total = int(win.n[idx].sum())
+        self.direct_t = np.empty(total)
+        self.direct_u = np.empty((total, len(lam)), dtype=complex)
+        csum = np.cumsum(win.n[idx])
+        lo = 0
+        while lo < len(idx):
+            base = csum[lo - 1] if lo else 0
+            hi = max(int(np.searchsorted(csum, base + CHUNK_NODES, side="right")), lo + 1)
+            sel = idx[lo:hi]
+            nd = _nodes(win, sel)
+            feats = self._imu_features(nd.t, win.piece[sel][nd.window])
+            u = _apply_form(feats, self.a_sig)  # (N, R)
+            b_w = win.b[sel][nd.window]
+            wt = nd.weight[:, None] * np.exp(lam[None, :] * (b_w - nd.t)[:, None])
+            self.incr[sel] = np.add.reduceat(wt * u, nd.first, axis=0)
+            cj = win.coarse[sel][nd.window]
+            jj, sums = _accumulate(cj, wt * self._to_coarse(b_w, cj), feats)
+            self._add_features(jj, sums)
+            self.direct_t[base : base + len(nd.t)] = nd.t
+            self.direct_u[base : base + len(nd.t)] = u
+            lo = hi
+
+    # --- fine output times --------------------------------------------------------------
+    def fine_states(self, t: np.ndarray, dt_fine: float | None) -> np.ndarray:
+        win = self.win
+        w = np.searchsorted(win.b, t - MERGE, side="left").clip(0, len(win.b) - 1)
+        dt = t - win.a[w]
+        table = _OffsetTable(self.lam, dt, dt_fine)
+        out = np.empty((len(t), len(self.lam)), dtype=complex)
+        kind = win.kind[w]
+        s = np.flatnonzero(kind == STILL)
+        if len(s):
+            out[s] = table.exp(s) * self.z_start[w[s]] + table.phi(s) * self.u_still[w[s]]
+        rr = np.flatnonzero(kind == ROTATION)
+        if len(rr):
+            out[rr] = table.exp(rr) * (
+                self.z_start[w[rr]] + self._rotation_integrals(w[rr], dt[rr], dt_fine)
+            )
+        c = np.flatnonzero(kind == CACHED)
+        if len(c):
+            if fine_aligned(self.step, dt_fine):
+                pos = np.clip(np.round(dt[c] / dt_fine).astype(int) - 1, 0, None)
+                ints = self._cached_integrals(w[c], pos, dt_fine)
+            else:
+                ints = self._cached_integrals_anywhere(w[c], dt[c])
+            out[c] = table.exp(c) * (self.z_start[w[c]] + ints)
+        d = np.flatnonzero(kind == DIRECT)
+        if len(d):
+            out[d] = table.exp(d) * (self.z_start[w[d]] + self._direct_integrals(w[d], dt[d]))
+        return out
+
+    def _cached_integrals(self, w: np.ndarray, pos: np.ndarray, dt_fine: float) -> np.ndarray:
+        """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine offsets ``pos`` of cached windows."""
+        n, s_nodes, fv = self.cached_template
+        step, lam = self.step, self.lam
+        nf = int(round(step / dt_fine))
+        xf = (np.arange(1, nf + 1) * dt_fine) / (0.5 * step) - 1.0
+        jmat = integral_of_series(xf, n) @ coefficient_matrix(n) * (0.5 * step)  # (nf, n)
+        g = np.exp(-lam[None, :] * s_nodes[:, None])  # (n, R)
+        forms = self.cached_forms  # (T, R, 63)
+        n_cls, m = fv.shape[0], fv.shape[1]
+        vals = np.empty((n_cls, m, nf, len(forms), len(lam)), dtype=complex)
+        for r in range(len(lam)):
+            # H[c, p, f, feat] = sum_q J[f, q] e^{-lambda_r s_q} F_cpq[feat]; then the forms
+            # of every table: one (C m nf, 63) @ (63, T) product per mode.
+            h = np.einsum("fq,cpqv->cpfv", jmat * g[None, :, r], fv).reshape(-1, N_FEATURES)
+            vals[..., r] = (
+                _apply_form(h.real, forms[:, r, :]) + 1j * _apply_form(h.imag, forms[:, r, :])
+            ).reshape(n_cls, m, nf, -1)
+        return vals[self.cached_class[w], self.win.phase[w], pos, self.cached_table[w]]
+
+    def _cached_integrals_anywhere(self, w: np.ndarray, dt: np.ndarray) -> np.ndarray:
+        """As :meth:`_cached_integrals` for fine times at any offset (grid not aligned).
+
+        The template's signed input of each (class, phase, table) is turned into its
+        Chebyshev series once; each fine time then integrates the series to its offset.
+        """
+        n, s_nodes, fv = self.cached_template
+        lam, step = self.lam, self.step
+        key = (self.cached_class[w] * fv.shape[1] + self.win.phase[w]) * len(
+            self.cached_forms
+        ) + self.cached_table[w]
+        keys, inv = np.unique(key, return_inverse=True)
+        inv = inv.reshape(-1)
+        nt, m = len(self.cached_forms), fv.shape[1]
+        c_, p_, t_ = keys // (nt * m), (keys // nt) % m, keys % nt
+        forms = self.cached_forms[t_]  # (K, R, 63)
+        u = np.einsum("kqv,krv->kqr", fv[c_, p_], forms)  # (K, n, R) signed input at nodes
+        g = u * np.exp(-lam[None, None, :] * s_nodes[None, :, None])
+        coef = np.tensordot(coefficient_matrix(n), g, axes=([1], [1]))  # (n, K, R)
+        ints = integral_of_series(dt / (0.5 * step) - 1.0, n)  # (F, n)
+        acc = np.zeros((len(w), len(lam)), dtype=complex)
+        for k in range(n):
+            acc += ints[:, k, None] * coef[k][inv]
+        return 0.5 * step * acc
+
+    def _direct_integrals(self, w: np.ndarray, dt: np.ndarray) -> np.ndarray:
+        """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine times of direct windows.
+
+        The Chebyshev series of ``g(s) = e^{-lambda (s - a)} u(s)`` on each window,
+        integrated term by term to the output times. Windows of the same shape (points,
+        length, fine offsets: every turn of an open-loop table on a still vehicle) share
+        one integration matrix, applied to all of them in one product.
+        """
+        win, lam = self.win, self.lam
+        out = np.zeros((len(w), len(lam)), dtype=complex)
+        wins, first_pt, counts = np.unique(w, return_index=True, return_counts=True)
+        length = win.b[wins] - win.a[wins]
+        key = np.stack(
+            [win.n[wins], np.rint(length * 1e6), np.rint(dt[first_pt] * 1e6), counts], axis=1
+        ).astype(np.int64)
+        shapes, shape_of, shape_count = np.unique(
+            key, axis=0, return_inverse=True, return_counts=True
+        )
+        shape_of = shape_of.reshape(-1)
+        for sh in np.flatnonzero(shape_count > 1):
+            members = np.flatnonzero(shape_of == sh)
+            m = int(win.n[wins[members[0]]])
+            g = self._direct_g(wins[members], m)  # (Wg, m, R)
+            half = 0.5 * length[members[0]]
+            cnt = int(counts[members[0]])
+            # Points of one window are consecutive (sorted times): first_pt .. + count.
+            pts = first_pt[members][:, None] + np.arange(cnt)[None, :]  # (Wg, cnt)
+            jmat = integration_matrix(dt[pts[0]] / half - 1.0, m) * half  # (cnt, m), shared
+            vals = np.tensordot(jmat, g, axes=([1], [1]))  # (cnt, Wg, R)
+            out[pts.T.ravel()] = vals.reshape(cnt * len(members), len(lam))
+        # Windows of a shape of their own (irregular stop times): point by point.
+        single = np.isin(shape_of, np.flatnonzero(shape_count == 1))
+        if np.any(single):
+            sel_w = wins[single]
+            pts = np.flatnonzero(np.isin(w, sel_w))
+            n_w = win.n[w[pts]]
+            for m in np.unique(n_w):
+                sub = pts[n_w == m]
+                ws, inverse = np.unique(w[sub], return_inverse=True)
+                coef = np.tensordot(
+                    coefficient_matrix(int(m)), self._direct_g(ws, int(m)), axes=([1], [1])
+                )  # (m, Ws, R)
+                half = 0.5 * (win.b[w[sub]] - win.a[w[sub]])
+                ints = integral_of_series(dt[sub] / half - 1.0, int(m))  # (F, m)
+                inv = inverse.reshape(-1)
+                acc = np.zeros((len(sub), len(lam)), dtype=complex)
+                for k in range(int(m)):
+                    acc += ints[:, k, None] * coef[k][inv]
+                out[sub] = half[:, None] * acc
+        return out
+
+    def _direct_g(self, wins: np.ndarray, m: int) -> np.ndarray:
+        """``e^{-lambda (s - a)} u(s)`` at the nodes of direct windows ``wins`` (W, m, R)."""
+        node = self.direct_first[wins][:, None] + np.arange(m)[None, :]
+        shift = self.direct_t[node] - self.win.a[wins][:, None]
+        return self.direct_u[node] * np.exp(-self.lam[None, None, :] * shift[..., None])
+
+
+def _vehicle_forms(a_sig: np.ndarray, mats: np.ndarray) -> np.ndarray:
+    """(T, R, 63): the signed input as a linear form in the vehicle features, per table.
+
+    ``u = sum_f A[r, f] F_imu[f]`` and ``F_imu = vehicle_to_imu(F_veh, M)``; the form on
+    the vehicle features is the transpose map applied to ``A``:
+    ``A_M[r, (a, k)] = sum_i A[r, (a, i)] M[k, i]`` and likewise with ``M kron M``.
+    """
+    t = len(mats)
+    r = a_sig.shape[0]
+    out = np.empty((t, r, N_FEATURES), dtype=complex)
+    a1 = a_sig[:, :9].reshape(r, 3, 3)
+    out[:, :, :9] = np.einsum("rai,tki->trak", a1, mats).reshape(t, r, 9)
+    for lo in (9, 36):
+        a2 = a_sig[:, lo : lo + 27].reshape(r, 3, 3, 3)
+        tmp = np.einsum("raij,tlj->trail", a2, mats)
+        out[:, :, lo : lo + 27] = np.einsum("trail,tki->trakl", tmp, mats).reshape(t, r, 27)
+    return out
+
+
+def _nodes(win: Windows, sel: np.ndarray) -> _Nodes:
+    """Chebyshev nodes and Fejér weights of windows ``sel`` (flat, in window order)."""
+    a, b, n = win.a[sel], win.b[sel], win.n[sel]
+    half = 0.5 * (b - a)
+    first = np.concatenate([[0], np.cumsum(n)[:-1]])
+    total = int(n.sum())
+    t = np.empty(total)
+    w = np.empty(total)
+    widx = np.repeat(np.arange(len(a)), n)
+    for m in np.unique(n):
+        s = np.flatnonzero(n == m)
+        x = chebyshev_points(int(m))
+        pos = first[s][:, None] + np.arange(m)[None, :]
+        t[pos] = a[s][:, None] + (x[None, :] + 1.0) * half[s][:, None]
+        w[pos] = fejer_weights(int(m))[None, :] * half[s][:, None]
+    return _Nodes(t, w, widx, first)
+
+
+@dataclass
+class _Nodes:
+    """The quadrature nodes of a set of windows (flat, in window order)."""
+
+    t: np.ndarray  # (N,) s
+    weight: np.ndarray  # (N,) Fejér weight * half length
+    window: np.ndarray  # (N,) position of the node's window in the set
+    first: np.ndarray  # (W,) index of each window's first node
+
+
+def _apply_form(feats: np.ndarray, form: np.ndarray) -> np.ndarray:
+    """``feats @ form.T`` for real features and a complex form (two real products)."""
+    return feats @ form.real.T + 1j * (feats @ form.imag.T)
+
+
+def _group_sum(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sums of ``values`` rows with equal ``keys``: (unique keys, sums)."""
+    if len(keys) > 1 and np.all(keys[1:] >= keys[:-1]):
+        k, v = keys, values  # already grouped (the common case): no sort, no copy
+    else:
+        order = np.argsort(keys, kind="stable")
+        k, v = keys[order], values[order]
+    start = np.flatnonzero(np.concatenate([[True], k[1:] != k[:-1]]))
+    return k[start], np.add.reduceat(v, start, axis=0)
+
+
+def _accumulate(cj: np.ndarray, wt: np.ndarray, feats: np.ndarray):
+    """Per coarse interval j: ``sum over its nodes of wt[node, r] * feats[node, f]``.
+
+    Returns the distinct intervals and their sums (K, R, 63).
+    """
+    # Nodes are in time order, so each coarse interval is one contiguous run.
+    start = np.flatnonzero(np.concatenate([[True], cj[1:] != cj[:-1]]))
+    count = np.diff(np.concatenate([start, [len(cj)]]))
+    width = int(count.max())
+    pos = np.arange(len(cj)) - np.repeat(start, count)
+    run = np.repeat(np.arange(len(start)), count)
+    wpad = np.zeros((len(start), width, wt.shape[1]), dtype=complex)
+    fpad = np.zeros((len(start), width, feats.shape[1]))
+    wpad[run, pos] = wt
+    fpad[run, pos] = feats
+    wt_t = np.swapaxes(wpad, 1, 2)
+    return cj[start], np.matmul(wt_t.real, fpad) + 1j * np.matmul(wt_t.imag, fpad)
+
+
+# ---------------------------------------------------------------------------------------
+# White noise
+# ---------------------------------------------------------------------------------------
+def white_noise_covariance(
+    model: ErrorModel, arw: float, vrw: float, t: Sequence[float] | np.ndarray
+) -> np.ndarray:
+    """Navigation-error covariance from gyro and accelerometer white noise, in closed form.
+
+    The noise is isotropic (same density on every IMU axis), so its projection into n
+    does not depend on the attitude and ``P(t) = V [M o Xi(t)] V^H`` with
+    ``M = V^-1 G Q G^T V^-H`` and ``Xi_ij(t) = t phi_1((lambda_i + conj(lambda_j)) t)``.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        Site and vertical mode.
+    arw : float, rad/sqrt(s)
+        Angle random walk (PSD ``arw^2`` on each gyro axis).
+    vrw : float, m/s/sqrt(s)
+        Velocity random walk (PSD ``vrw^2`` on each accelerometer axis).
+    t : (M,) s
+        Times, >= 0.
+
+    Returns
+    -------
+    ndarray, shape (M, 9, 9)
+        Covariance of psi (rad), dv (m/s), dr (m), ENU, symmetrised.
+    """
+    modes = NavModes(model)
+    t = np.asarray(t, dtype=float)
+    inv, out, lam = modes.inv_all, modes.out_all, modes.lam_all
+    g = np.zeros((9, 6))
+    g[0:3, 0:3] = -np.eye(3)
+    g[3:6, 3:6] = np.eye(3)
+    if model.vertical == "clamped":
+        g[5, :] = 0.0
+    q = np.diag([arw**2] * 3 + [vrw**2] * 3)
+    m = inv @ g @ q @ g.T @ inv.conj().T
+    s = lam[:, None] + lam.conj()[None, :]
+    xi = t[:, None, None] * phi1(s[None] * t[:, None, None])
+    p = (out @ (m[None] * xi) @ out.conj().T).real
+    return 0.5 * (p + np.swapaxes(p, 1, 2))

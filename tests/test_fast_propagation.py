@@ -1,0 +1,368 @@
+"""The fast engine against the step-by-step exact engine and against closed forms.
+
+Three kinds of truth:
+
+* On a :class:`~inserr.model.timeline.Timeline` both engines solve the same
+  piecewise-constant-rate problem, so they must agree to round-off. The exact engine
+  is :mod:`inserr.model.exact_propagation` (python-control / structured expm per step),
+  an independent implementation (augmented 33-state transitions vs modal scalars and
+  quadrature).
+* On the continuous motion (:class:`~inserr.schemes.composition.ScheduleHistory`) the
+  exact engine needs sub-steps; its error is O(h^2) (geodesic sub-steps), so the two
+  must converge: halving h divides the difference by about 4, and the Richardson
+  extrapolation of the exact engine agrees with the fast one far better than either
+  sub-step does.
+* Closed forms: the modal decomposition reproduces F and expm(F t); Fejér quadrature
+  and the spectral integration matrix are exact for polynomials; the white-noise
+  covariance equals Van Loan's discretization stepped by the exact engine.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+from inserr.core.earth import Site
+from inserr.core.imu import ImuErrors, InitialErrors
+from inserr.core.units import ARCSEC, DEG, DEG_PER_HOUR, MICRO_G, PPM
+from inserr.drift.analysis import analyze_drift, output_grid
+from inserr.model import fast_propagation as fp
+from inserr.model import quadrature as q
+from inserr.model.discretization import Discretizer
+from inserr.model.exact_propagation import propagate_covariance
+from inserr.model.modal import NavModes
+from inserr.model.psi_model import ErrorModel, Layout
+from inserr.model.timeline import Timeline
+from inserr.schemes.catalogue import build_scheme
+from inserr.schemes.composition import ScheduleHistory, build_timeline
+from inserr.schemes.vehicle_motion import HeadingHistory, Motion, Turn, YawSwing
+
+SITE = Site.from_degrees(34.246, 108.91, 380.0)
+#: P0-like budget with every kind of constant error (different per axis, so that an
+#: axis or frame mix-up cannot cancel).
+IMU = ImuErrors(
+    gyro_bias=np.array([0.003, -0.002, 0.004]) * DEG_PER_HOUR,
+    accel_bias=np.array([30.0, -20.0, 10.0]) * MICRO_G,
+    gyro_scale_factor=np.array([10.0, -7.0, 12.0]) * PPM,
+    accel_scale_factor=np.array([-10.0, 8.0, 5.0]) * PPM,
+    gyro_misalignment=np.array([10.0, -6.0, 4.0, 8.0, -9.0, 3.0]) * ARCSEC,
+    accel_misalignment=np.array([-5.0, 7.0, 10.0, -3.0, 6.0, -8.0]) * ARCSEC,
+)
+INIT = InitialErrors(
+    np.array([10.0, -10.0, 60.0]) * ARCSEC, np.array([0.01, -0.02, 0.0]), np.array([10.0, 5.0, 0.0])
+)
+SWING = YawSwing(heading=15 * DEG, pitch=1 * DEG, roll=-2 * DEG, amplitude=6 * DEG, period=120.0)
+
+
+def _relative(a: np.ndarray, b: np.ndarray) -> float:
+    """Largest difference relative to the largest magnitude, per column, over time.
+
+    A column that is zero in physics (e.g. an east position error seen in the east
+    position of a clamped, Schuler-neutral combination) carries round-off of the size of
+    the *whole* response: columns below 1e-6 of the largest are compared with that floor
+    (1e-9 of it is 1e-15 of the largest response, i.e. round-off).
+    """
+    col = np.abs(b).max(axis=0)
+    scale = np.maximum(col, 1e-6 * col.max() + 1e-300)
+    return float((np.abs(a - b).max(axis=0) / scale).max())
+
+
+def _both(history, hours_out=(10.0, 60.0), **kw):
+    fast = analyze_drift(SITE, IMU, INIT, history, dt_out=hours_out[0], dt_cov=hours_out[1], **kw)
+    return fast
+
+
+# --- modal decomposition --------------------------------------------------------------
+@pytest.mark.parametrize("vertical", ["clamped", "free"])
+@pytest.mark.parametrize("lat", [0.0, 34.0, -60.0, 89.9])
+def test_modes_reproduce_the_navigation_block_and_its_exponential(lat, vertical):
+    model = ErrorModel(Site.from_degrees(lat), vertical=vertical)
+    modes = NavModes(model)
+    f = model.nav_matrix
+    v, vinv, lam = modes.out_all, modes.inv_all, modes.lam_all
+    active = np.abs(v).sum(axis=1) > 0
+    # V diag(lambda) V^-1 = F on the active states (clamped vertical states are dropped),
+    # compared on the balanced state (psi * R, dv / w_s, dr: all in metres of the same
+    # size), where F's entries are all O(w_s) and round-off is uniform.
+    rebuilt = (v @ np.diag(lam) @ vinv).real
+    ws = math.sqrt(model.site.g / model.site.mean_radius)
+    d = np.repeat([model.site.mean_radius, 1.0 / ws, 1.0], 3)
+    bal = lambda a: d[:, None] * a / d[None, :]  # noqa: E731
+    target = bal(f * active[:, None] * active[None, :])
+    assert np.abs(bal(rebuilt) - target).max() < 1e-12 * np.abs(target).max()
+    # The real transition over 1000 s from the kept modes equals expm (longer times make
+    # the reference's own scaling-and-squaring error, ~eps |F t|, the larger one).
+    t = 1000.0
+    x0 = np.random.default_rng(1).normal(size=9) * active
+    z = modes.to_modes(x0) * np.exp(modes.lam * t)
+    ref = sl.expm(f * t) @ x0
+    assert np.allclose(modes.to_nav(z), ref * active, rtol=1e-9, atol=1e-9 * np.abs(ref).max())
+
+
+# --- quadrature ------------------------------------------------------------------------
+@pytest.mark.parametrize("n", [1, 2, 5, 12, 26])
+def test_fejer_and_spectral_integration_are_exact_for_polynomials(n):
+    x = q.chebyshev_points(n)
+    rng = np.random.default_rng(n)
+    c = rng.normal(size=n)  # a polynomial of degree n - 1
+    p = np.polynomial.Polynomial(c)
+    antider = p.integ(lbnd=-1.0)
+    assert math.isclose(q.fejer_weights(n) @ p(x), antider(1.0), rel_tol=1e-12, abs_tol=1e-12)
+    pts = np.linspace(-1.0, 1.0, 7)
+    assert np.allclose(q.integration_matrix(pts, n) @ p(x), antider(pts), atol=1e-12)
+
+
+def test_points_for_the_phase_budget_integrate_an_oscillation_to_round_off():
+    # The table in quadrature.py claims ~1e-15: check the worst case of each entry, a
+    # complex exponential whose phase over the interval is the entry's budget.
+    for budget, n in q._POINTS[1:]:
+        x = q.chebyshev_points(n)
+        w = budget / 2.0  # on [-1, 1] the phase budget W (b - a) is 2 w
+        f = np.exp(1j * w * x)
+        exact = 2.0 * math.sin(w) / w
+        assert abs(q.fejer_weights(n) @ f - exact) < 1e-14, (budget, n)
+        pts = np.linspace(-1, 1, 11)
+        ex = (np.exp(1j * w * pts) - np.exp(-1j * w)) / (1j * w)
+        assert np.abs(q.integration_matrix(pts, n) @ f - ex).max() < 5e-14, (budget, n)
+
+
+# --- the same piecewise-constant-rate problem: round-off agreement ------------------
+def _timeline_cases():
+    tl_swing = build_timeline(
+        build_scheme("two-position", 6 * DEG, 300.0).plan(SWING, 3600.0), SWING, 3600.0, 1.0
+    )
+    turn = Turn(heading=10 * DEG, pitch=2 * DEG, roll=1 * DEG, rate=0.5 * DEG)
+    hh = HeadingHistory(
+        pitch=1 * DEG,
+        roll=1 * DEG,
+        times=np.arange(0.0, 3700.0, 7.0),
+        headings=np.cumsum(np.random.default_rng(3).normal(size=529)) * 0.02,
+    )
+    static = Motion(heading=30 * DEG, pitch=1 * DEG, roll=-2 * DEG)
+    cases = {
+        "static-four-position-modified": (static, "four-position-modified", 7200.0),
+        "static-sixteen-position": (static, "sixteen-position", 7200.0),
+        "turn-continuous": (turn, "continuous", 3600.0),
+        "static-continuous": (static, "continuous", 3600.0),
+        "swing-flexible": (SWING, "flexible-two-position", 3600.0),
+        "swing-isolation": (SWING, "heading-isolation", 1800.0),
+        "history-nulling": (hh, "nulling-two-position", 3600.0),
+    }
+    out = {"swing-two-position": tl_swing}
+    for key, (motion, scheme, dur) in cases.items():
+        table = build_scheme(scheme, 6 * DEG, 120.0).plan(motion, dur)
+        out[key] = build_timeline(table, motion, dur, 1.0)
+    return out
+
+
+TIMELINES = _timeline_cases()
+
+
+@pytest.mark.parametrize("name", sorted(TIMELINES))
+def test_fast_equals_exact_on_the_same_timeline(name):
+    tl = TIMELINES[name]
+    fast = analyze_drift(SITE, IMU, INIT, tl, dt_out=10.0, dt_cov=60.0, engine="fast")
+    exact = analyze_drift(SITE, IMU, INIT, tl, dt_out=10.0, dt_cov=60.0, engine="exact")
+    # Both solve this problem exactly, up to the step engine's own error: its expm of a
+    # whole 60 s turn or 300 s stop (|A h| ~ 600 to 3000) is good to ~1e-13, which
+    # accumulates to ~1e-7 of the smallest responses within an hour (the next tests
+    # settle which engine errs with an 80-bit expm chain), hence 3e-7 here.
+    assert _relative(fast.nav, exact.nav) < 3e-7
+    n = len(fast.t_cov)
+    h_f, h_e = fast.source_horizontal.reshape(n, -1), exact.source_horizontal.reshape(n, -1)
+    assert _relative(h_f, h_e) < 3e-7
+    assert _relative(fast.source_heading, exact.source_heading) < 3e-7
+
+
+def _expm_longdouble(a: np.ndarray, h: float) -> np.ndarray:
+    """expm(A h) in 80-bit extended precision: Taylor series with scaling and squaring."""
+    ld = np.longdouble
+    b = a.astype(ld) * ld(h)
+    norm = float(np.abs(b).sum(axis=1).max())
+    s = max(0, math.ceil(math.log2(norm / 0.05))) if norm > 0 else 0
+    b = b / ld(2**s)
+    out = np.eye(len(a), dtype=ld)
+    term = np.eye(len(a), dtype=ld)
+    for k in range(1, 30):  # |B| <= 0.05: the series is exhausted long before 30 terms
+        term = term @ b / ld(k)
+        out = out + term
+    for _ in range(s):
+        out = out @ out
+    return out
+
+
+def _extended_precision_response(tl: Timeline, imu: ImuErrors, source: str) -> tuple:
+    """Final horizontal error of one source through an 80-bit expm chain over the timeline."""
+    from inserr.model.error_sources import constant_sources, layout_for, source_matrix
+
+    model = ErrorModel(SITE, layout_for(imu))
+    srcs = constant_sources(imu, InitialErrors())
+    j = [s.name for s in srcs].index(source)
+    x = (source_matrix(model, [srcs[j]], tl.c_sn[0])[:, 0] * srcs[j].value).astype(np.longdouble)
+    cache: dict = {}
+    for k in range(len(tl.omega_n)):
+        key = (tuple(np.round(tl.omega_n[k], 15)), round(tl.times[k + 1] - tl.times[k], 12))
+        if key not in cache:
+            cache[key] = _expm_longdouble(model.matrix(tl.omega_n[k]), key[1])
+        x = cache[key] @ x
+    return j, x[6:8].astype(float)
+
+
+@pytest.mark.parametrize(
+    ("name", "source"),
+    [
+        ("static-continuous", "gyro_misalignment_zx"),
+        ("static-sixteen-position", "gyro_misalignment_zy"),
+    ],
+)
+def test_fast_engine_equals_an_extended_precision_expm_chain(name, source):
+    # Arbiter for the fast-vs-exact differences above: 80-bit expm of the augmented
+    # matrix per interval, chained in 80 bits. The fast engine agrees to round-off.
+    tl = TIMELINES[name]
+    j, ref = _extended_precision_response(tl, IMU, source)
+    fast = analyze_drift(SITE, IMU, InitialErrors(), tl, dt_out=10.0, dt_cov=60.0)
+    got = fast.source_horizontal[-1, j]
+    assert np.linalg.norm(got - ref) < 1e-10 * np.linalg.norm(ref)
+
+
+def test_over_a_day_the_fast_engine_keeps_round_off_where_the_step_engine_drifts():
+    # Static four-position indexing cancels most of an accelerometer bias, so the 24 h
+    # residual is a small difference of large terms: the step-by-step engine's per-step
+    # expm error (~1e-13 relative on |A h| ~ 3000) accumulates over ~1000 stops to
+    # ~1e-6 of the residual; the fast engine's closed forms stay at round-off.
+    motion = Motion()
+    dur = 24 * 3600.0
+    tl = build_timeline(
+        build_scheme("four-position", 6 * DEG, 300.0).plan(motion, dur), motion, dur
+    )
+    imu = ImuErrors(accel_bias=np.array([100.0, 0.0, 0.0]) * MICRO_G)
+    j, ref = _extended_precision_response(tl, imu, "accel_bias_x")
+    fast = analyze_drift(SITE, imu, InitialErrors(), tl, dt_out=600.0, dt_cov=600.0)
+    assert np.linalg.norm(fast.source_horizontal[-1, j] - ref) < 1e-11 * np.linalg.norm(ref)
+
+
+def test_free_vertical_channel_agrees_over_a_short_run():
+    # The unstable vertical mode (time constant ~570 s) exercises the blocked scans.
+    tl = TIMELINES["static-sixteen-position"]
+    kw = dict(dt_out=10.0, dt_cov=60.0, vertical="free")
+    init = InitialErrors(np.zeros(3), np.array([0.0, 0.0, 0.01]), np.array([0.0, 0.0, 1.0]))
+    fast = analyze_drift(SITE, IMU, init, tl, engine="fast", **kw)
+    exact = analyze_drift(SITE, IMU, init, tl, engine="exact", **kw)
+    assert np.all(np.isfinite(fast.nav))
+    assert _relative(fast.nav, exact.nav) < 1e-7  # as in the test above
+
+
+# --- the continuous motion: convergence of the sub-stepped exact engine ---------------
+@pytest.mark.parametrize("scheme", ["two-position", "flexible-two-position", "heading-isolation"])
+def test_exact_engine_converges_to_the_fast_one_as_its_substep_shrinks(scheme):
+    dur = 1800.0
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, dur), SWING, dur)
+    fast = analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0).nav
+    errs = []
+    navs = []
+    for h in (1.0, 0.5):
+        ex = analyze_drift(
+            SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0, engine="exact", substep=h
+        ).nav
+        navs.append(ex)
+        errs.append(_relative(ex, fast))
+    # Second order: halving h divides the error by 4 (3 to 5 allowed: the error is not
+    # exactly h^2 where stops end between sub-step nodes).
+    assert 3.0 < errs[0] / errs[1] < 5.0
+    richardson = navs[1] + (navs[1] - navs[0]) / 3.0
+    assert _relative(richardson, fast) < errs[1] / 20.0
+
+
+@pytest.mark.parametrize("dt_out", [1.0, 7.0])
+def test_phase_cache_equals_direct_sampling(dt_out):
+    # Stops on a periodic vehicle reuse the vehicle part per phase; forbidding that
+    # (no phase step) must change nothing but round-off. A 7 s output step does not
+    # divide the 20 s phase step: fine times then fall anywhere in the cached windows.
+    dur = 3600.0
+    hist = ScheduleHistory(
+        build_scheme("nulling-two-position", 6 * DEG, 300.0).plan(SWING, dur), SWING, dur
+    )
+    model = ErrorModel(SITE, Layout(scale_misalignment=True))
+    from inserr.model.error_sources import constant_sources, source_set
+
+    src = source_set(model, constant_sources(IMU, INIT))
+    t, tc = output_grid(dur, dt_out), output_grid(dur, 60.0)
+    cached = fp.constant_error_response(model, hist, src, t, tc)
+    assert cached.windows["cached"] > 0
+    real_step = fp.phase_step
+    try:
+        fp.phase_step = lambda *a, **k: None
+        direct = fp.constant_error_response(model, hist, src, t, tc)
+    finally:
+        fp.phase_step = real_step
+    assert direct.windows["cached"] == 0
+    assert _relative(cached.fine, direct.fine) < 1e-11
+    assert _relative(cached.coarse.reshape(len(tc), -1), direct.coarse.reshape(len(tc), -1)) < 1e-11
+
+
+# --- white noise ------------------------------------------------------------------------
+@pytest.mark.parametrize("vertical", ["clamped", "free"])
+def test_white_noise_closed_form_equals_stepped_van_loan(vertical):
+    model = ErrorModel(SITE, Layout(bias=False), vertical=vertical)
+    arw, vrw = 0.001 * DEG / 60.0, 10 * MICRO_G
+    t = output_grid(4 * 3600.0 if vertical == "clamped" else 1800.0, 60.0)
+    closed = fp.white_noise_covariance(model, arw, vrw, t)
+    disc = Discretizer(model, model.noise_intensity(arw, vrw))
+    stepped = propagate_covariance(disc, Timeline.static(np.eye(3), t[-1]), np.zeros((9, 9)), t)
+    d = np.sqrt(np.maximum(np.diagonal(stepped, axis1=1, axis2=2), 1e-300))
+    # Compare correlation-normalised entries: both exact, Van Loan stepped 240 times.
+    norm = d[:, :, None] * d[:, None, :]
+    err = np.abs(closed - stepped) / np.where(norm > 0, norm, 1.0)
+    assert err[1:].max() < 1e-9
+    # Limiting case: early on the attitude variance grows as ARW^2 t (per axis).
+    assert math.isclose(closed[1, 0, 0], arw**2 * 60.0, rel_tol=1e-3)
+
+
+@pytest.mark.parametrize("scheme", ["two-position", "heading-isolation", "nulling-two-position"])
+def test_quadrature_is_converged(monkeypatch, scheme):
+    # Halving the phase budget of every window (twice the windows, each sampled at the
+    # rate its own budget asks) must change nothing beyond round-off: the windows'
+    # Chebyshev quadrature is converged on the continuous motion.
+    dur = 3600.0
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, dur), SWING, dur)
+    ref = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    monkeypatch.setattr(fp, "MAX_PHASE", fp.MAX_PHASE / 2.0)
+    finer = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    assert _relative(finer.nav, ref.nav) < 1e-11
+    n = len(ref.t_cov)
+    assert (
+        _relative(finer.source_horizontal.reshape(n, -1), ref.source_horizontal.reshape(n, -1))
+        < 1e-11
+    )
+
+
+# The step engine chains 4320 expm steps of 60 s: its round-off grows to ~4e-9.
+@pytest.mark.parametrize(("engine", "rtol"), [("fast", 1e-10), ("exact", 1e-8)])
+def test_vertical_gyro_bias_drifts_east_at_r_b_sin_cos_and_leaves_heading_bounded(engine, rtol):
+    # Closed form (docs/theory.md, 4.1): the zero mode (psi along the Earth axis) grows
+    # as -b sin L t; the Schuler loop keeps the true tilt bounded, so dr_E grows at
+    # R_N b sin L cos L and the secular heading terms cancel. Everything else is a sum of
+    # sinusoids at the mode frequencies, so a least-squares fit on [1, t, sinusoids] is
+    # exact up to round-off.
+    from inserr.model.psi_model import modes
+
+    site = Site.from_degrees(34.0)
+    b = 0.01 * DEG_PER_HOUR
+    imu = ImuErrors(gyro_bias=np.array([0.0, 0.0, b]))
+    hist = ScheduleHistory(
+        build_scheme("none", 6 * DEG, 300.0).plan(Motion(), 72 * 3600.0), Motion(), 72 * 3600.0
+    )
+    res = analyze_drift(site, imu, InitialErrors(), hist, dt_out=60.0, engine=engine)
+    ev = modes(ErrorModel(site)).eigenvalues
+    freqs = np.unique(np.round(np.abs(ev.imag[ev.imag > 1e-9]), 15))
+    t = res.t
+    basis = np.stack([np.ones_like(t), t] + [f(w * t) for w in freqs for f in (np.cos, np.sin)], 1)
+    slope_e = np.linalg.lstsq(basis, res.nav[:, 6], rcond=None)[0][1]
+    slope_h = np.linalg.lstsq(basis, res.attitude[:, 2], rcond=None)[0][1]
+    lat = math.radians(34.0)
+    expected = site.r_n * b * math.sin(lat) * math.cos(lat)
+    assert math.isclose(slope_e, expected, rel_tol=rtol)
+    assert abs(slope_h) < 1e-9 * b  # rad/s: no secular heading drift
