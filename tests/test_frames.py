@@ -36,9 +36,12 @@ WGS84_GAMMA_E = 9.7803253359
 WGS84_GAMMA_P = 9.8321849378
 EARTH_RATE = 7.292115e-5  # rad/s, the WGS84 value
 
-#: (dt_out, dt_cov) pairs: 1 s steps -> structured path; 900 s steps -> python-control.
+#: Both engines of analyze_drift: the fast (modal) one, the default; the step-by-step
+#: exact one with 1 s steps (structured path) and with 900 s steps (python-control).
 PATHS = pytest.mark.parametrize(
-    "dt_out, dt_cov", [(1.0, 60.0), (900.0, 900.0)], ids=["structured", "python-control"]
+    "engine, dt_out, dt_cov",
+    [("fast", 1.0, 60.0), ("exact", 1.0, 60.0), ("exact", 900.0, 900.0)],
+    ids=["fast", "exact-structured", "exact-python-control"],
 )
 
 
@@ -116,7 +119,7 @@ def _assert_same_nav(a, b, rtol=1e-9):
 
 @PATHS
 def test_imu_frame_errors_on_a_turned_tilted_imu_equal_hand_resolved_errors_on_an_aligned_imu(
-    dt_out, dt_cov
+    engine, dt_out, dt_cov
 ):
     """IMU at a random (turned and tilted) attitude C with IMU-frame biases b and
     error matrices K equals an IMU aligned with ENU carrying C b and C K C^T.
@@ -140,6 +143,7 @@ def test_imu_frame_errors_on_a_turned_tilted_imu_equal_hand_resolved_errors_on_a
         _stop_turn_stop(c),
         dt_out=dt_out,
         dt_cov=dt_cov,
+        engine=engine,
     )
     aligned = analyze_drift(
         site,
@@ -148,13 +152,14 @@ def test_imu_frame_errors_on_a_turned_tilted_imu_equal_hand_resolved_errors_on_a
         _stop_turn_stop(np.eye(3)),
         dt_out=dt_out,
         dt_cov=dt_cov,
+        engine=engine,
     )
     assert np.abs(aligned.nav[-1, 6:8]).max() > 1.0  # metres: a real response, not zeros
     _assert_same_nav(turned.nav, aligned.nav)
 
 
 @PATHS
-def test_heading_rotated_static_imu_x_gyro_bias_is_the_rotated_bias(dt_out, dt_cov):
+def test_heading_rotated_static_imu_x_gyro_bias_is_the_rotated_bias(engine, dt_out, dt_cov):
     """An IMU at heading 90 deg (y forward pointing east, x right pointing south, z up)
     with an x gyro bias b is an aligned IMU with a y (north) gyro bias of -b.
 
@@ -173,6 +178,7 @@ def test_heading_rotated_static_imu_x_gyro_bias_is_the_rotated_bias(dt_out, dt_c
         tl_east,
         dt_out=dt_out,
         dt_cov=dt_cov,
+        engine=engine,
     )
     north = analyze_drift(
         site,
@@ -181,6 +187,7 @@ def test_heading_rotated_static_imu_x_gyro_bias_is_the_rotated_bias(dt_out, dt_c
         tl_north,
         dt_out=dt_out,
         dt_cov=dt_cov,
+        engine=engine,
     )
     _assert_same_nav(east.nav, north.nav)
     # And it is not the unrotated bias (which would drive the east tilt instead).
@@ -191,6 +198,7 @@ def test_heading_rotated_static_imu_x_gyro_bias_is_the_rotated_bias(dt_out, dt_c
         tl_north,
         dt_out=dt_out,
         dt_cov=dt_cov,
+        engine=engine,
     )
     assert np.abs(wrong.nav[-1] - east.nav[-1]).max() > 0.1 * np.abs(east.nav[-1]).max()
 
@@ -216,7 +224,7 @@ K_CASES = [
 @PATHS
 @pytest.mark.parametrize("sensor, name, axis, source", K_CASES)
 def test_error_matrix_entry_on_a_static_aligned_imu_equals_a_bias(
-    sensor, name, axis, source, dt_out, dt_cov
+    sensor, name, axis, source, engine, dt_out, dt_cov
 ):
     lat = 34.0 * DEG
     site = Site(lat)
@@ -239,7 +247,9 @@ def test_error_matrix_entry_on_a_static_aligned_imu_equals_a_bias(
     bias = np.zeros(3)
     bias[axis] = k * inputs[source]
     tl = Timeline.static(np.eye(3), 7200.0)
-    with_k = analyze_drift(site, ImuErrors(**kw), InitialErrors(), tl, dt_out=dt_out, dt_cov=dt_cov)
+    with_k = analyze_drift(
+        site, ImuErrors(**kw), InitialErrors(), tl, dt_out=dt_out, dt_cov=dt_cov, engine=engine
+    )
     with_bias = analyze_drift(
         site,
         ImuErrors(**{f"{sensor}_bias": bias}),
@@ -247,6 +257,7 @@ def test_error_matrix_entry_on_a_static_aligned_imu_equals_a_bias(
         tl,
         dt_out=dt_out,
         dt_cov=dt_cov,
+        engine=engine,
     )
     assert np.abs(with_bias.nav[-1, 6:8]).max() > 1e-3  # a real response (metres)
     # Gravity: the test's Somigliana from the WGS84 defining constants and the code's
@@ -281,7 +292,7 @@ def test_kg_and_ka_states_follow_c_k_ct_on_a_turning_tilted_imu():
 
 
 @PATHS
-def test_east_and_north_schuler_channels_use_r_n_and_r_m(dt_out, dt_cov):
+def test_east_and_north_schuler_channels_use_r_n_and_r_m(engine, dt_out, dt_cov):
     """At the equator the clamped horizontal channels decouple exactly (Omega sin L = 0
     removes the Coriolis and Foucault coupling; psi is not excited by a velocity error),
     so an initial velocity error v gives dr = v / w sin(w t) with w_E = sqrt(g / R_N)
@@ -301,6 +312,7 @@ def test_east_and_north_schuler_channels_use_r_n_and_r_m(dt_out, dt_cov):
         Timeline.static(np.eye(3), duration),
         dt_out=dt_out,
         dt_cov=dt_cov,
+        engine=engine,
     )
     t = res.t
     amp = v / w_e
@@ -327,7 +339,7 @@ def test_position_error_angle_uses_r_m_north_and_r_n_east():
 
 
 @PATHS
-def test_initial_east_position_error_at_the_equator_stays_put(dt_out, dt_cov):
+def test_initial_east_position_error_at_the_equator_stays_put(engine, dt_out, dt_cov):
     """An initial east position error alone is not an attitude error: psi(0) = -dtheta
     = [0, -d / R_N, 0] is parallel to the Earth rate at the equator and exactly balances
     the gravity-gradient term g / R_N d, so nothing moves and phi stays zero."""
@@ -340,6 +352,7 @@ def test_initial_east_position_error_at_the_equator_stays_put(dt_out, dt_cov):
         Timeline.static(np.eye(3), 6 * 3600.0),
         dt_out=dt_out,
         dt_cov=dt_cov,
+        engine=engine,
     )
     # A wrong radius in psi(0) leaves g d (1/R_M - 1/R_N) ~ 5e-6 m/s^2 unbalanced, i.e.
     # ~ d (1 - R_M/R_N) = 3 m of Schuler oscillation; roundoff is ~1e-9 m.

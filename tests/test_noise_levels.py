@@ -102,13 +102,16 @@ def test_gauss_markov_states_stay_stationary_over_a_day_while_the_imu_turns():
     assert np.allclose(p[:, lay["ba"], lay["ba"]], sa**2 * np.eye(3), rtol=0, atol=1e-7 * sa**2)
 
 
-def test_arw_gives_an_exact_random_walk_of_the_equatorial_north_tilt():
+@pytest.mark.parametrize("engine", ["fast", "exact"])
+def test_arw_gives_an_exact_random_walk_of_the_equatorial_north_tilt(engine):
     # At the equator Omega = [0, W, 0]: psi_N' = -w_N exactly (Omega x psi has no north
     # component), so Var(psi_N) = ARW^2 t; psi_E and psi_U turn into each other at W and
     # the noise is isotropic, so Var(psi_E) + Var(psi_U) = 2 ARW^2 t. Exact over a day.
     arw = 0.002 * DEG_PER_SQRT_HOUR
     tl, _ = _turning_day()  # isotropic noise: the IMU's turning must not matter
-    res = analyze_drift(Site(0.0), ImuErrors(arw=arw), InitialErrors(), tl, dt_cov=3600.0)
+    res = analyze_drift(
+        Site(0.0), ImuErrors(arw=arw), InitialErrors(), tl, dt_cov=3600.0, engine=engine
+    )
     p = res.noise_cov["arw"]
     t = res.t_cov
     # Van Loan over whole hours: ~1e-12 relative; the leak of (W t)^2 is exactly zero here.
@@ -116,7 +119,8 @@ def test_arw_gives_an_exact_random_walk_of_the_equatorial_north_tilt():
     assert np.allclose(p[:, 0, 0] + p[:, 2, 2], 2 * arw**2 * t, rtol=1e-9, atol=0)
 
 
-def test_vrw_drives_each_equatorial_schuler_channel_as_the_closed_form():
+@pytest.mark.parametrize("engine", ["fast", "exact"])
+def test_vrw_drives_each_equatorial_schuler_channel_as_the_closed_form(engine):
     # dv' = w - (g/R) dr, dr' = dv (east: R_N, north: R_M) from rest with white w of PSD q:
     # Var dv = q (t/2 + sin(2 ws t) / (4 ws)), Var dr = q / ws^2 (t/2 - sin(2 ws t) / (4 ws)).
     vrw = 20 * MICRO_G
@@ -127,6 +131,7 @@ def test_vrw_drives_each_equatorial_schuler_channel_as_the_closed_form():
         InitialErrors(),
         Timeline.static(np.eye(3), duration),
         dt_cov=600.0,
+        engine=engine,
     )
     p = res.noise_cov["vrw"]
     t = res.t_cov
@@ -143,7 +148,8 @@ def test_vrw_drives_each_equatorial_schuler_channel_as_the_closed_form():
     assert np.allclose(p[:, 0:3, 0:3], 0.0, rtol=0, atol=1e-30)
 
 
-def test_noise_drms_and_headline_add_the_east_and_north_variances():
+@pytest.mark.parametrize("engine", ["fast", "exact"])
+def test_noise_drms_and_headline_add_the_east_and_north_variances(engine):
     # DRMS = sqrt(Var dr_E + Var dr_N), the VRW closed form of each channel above; the
     # headline 1 sigma and the RMS total (no constant errors here) are its final value
     # and its maximum, in nautical miles.
@@ -154,6 +160,7 @@ def test_noise_drms_and_headline_add_the_east_and_north_variances():
         InitialErrors(),
         Timeline.static(np.eye(3), 0.5 * DAY),
         dt_cov=600.0,
+        engine=engine,
     )
     t = res.t_cov
     var = 0.0

@@ -125,6 +125,7 @@ PSI = "inserr/model/psi_model.py"
 SRC = "inserr/model/error_sources.py"
 DISC = "inserr/model/discretization.py"
 PROP = "inserr/model/exact_propagation.py"
+FAST = "inserr/model/fast_propagation.py"
 TL = "inserr/model/timeline.py"
 AN = "inserr/drift/analysis.py"
 SIGNS = "inserr/drift/unknown_signs.py"
@@ -294,7 +295,11 @@ QUICK: tuple[Mutation, ...] = (
     _m(
         "drift-starts-from-identity",
         "drift run starts from I instead of C_s^n(0)",
-        (AN, "c0 = timeline.c_sn[0]", "c0 = np.eye(3)"),
+        (
+            AN,
+            "cols = source_matrix(model, sources, tl.c_sn[0])",
+            "cols = source_matrix(model, sources, np.eye(3))",
+        ),
     ),
     _m(
         "gm-not-stationary",
@@ -326,7 +331,49 @@ QUICK: tuple[Mutation, ...] = (
     _m(
         "worst-signs-zero",
         "worst case tries signs {0, 1} instead of {-1, +1}",
-        (SIGNS, "s = np.where(proj >= 0, 1.0, -1.0)", "s = np.where(proj >= 0, 1.0, 0.0)"),
+        (
+            SIGNS,
+            's0 = np.where(np.einsum("tnd,td->tn", vv, u0) >= 0, 1.0, -1.0)',
+            's0 = np.where(np.einsum("tnd,td->tn", vv, u0) >= 0, 1.0, 0.0)',
+        ),
+    ),
+    # --- the fast engine (inserr.model.fast_propagation, analyze_drift's default) -------
+    _m(
+        "fast-projection-transpose",
+        "fast engine: IMU features from C^T instead of C",
+        (FAST, "out[:, :9] = c.reshape(nn, 9)", "out[:, :9] = np.swapaxes(c, 1, 2).reshape(nn, 9)"),
+    ),
+    _m(
+        "fast-gyro-bias-sign",
+        "fast engine: gyro bias drives psi with +C e_i",
+        (
+            FAST,
+            'g1 = np.einsum("ra,jrai->jri", g, y1)',
+            'g1 = -np.einsum("ra,jrai->jri", g, y1)',
+        ),
+    ),
+    _m(
+        "fast-ka-transpose",
+        "fast engine: accelerometer error matrix applied transposed",
+        (
+            FAST,
+            "15 + 3 * src.imu_i + src.imu_j]",
+            "15 + 3 * src.imu_j + src.imu_i]",
+        ),
+    ),
+    _m(
+        "fast-table-transpose",
+        "fast engine: table seen through M^T instead of M",
+        (
+            FAST,
+            "out[:, :, :9] = (yy[:, :, :9].reshape(nb, nr * 3, 3) @ m)",
+            "out[:, :, :9] = (yy[:, :, :9].reshape(nb, nr * 3, 3) @ np.swapaxes(m, 1, 2))",
+        ),
+    ),
+    _m(
+        "fast-vrw-unsquared",
+        "fast engine white noise: VRW PSD vrw instead of vrw^2",
+        (FAST, "q = np.diag([arw**2] * 3 + [vrw**2] * 3)", "q = np.diag([arw**2] * 3 + [vrw] * 3)"),
     ),
     # --- discretization and propagation ----------------------------------------------
     _m(
