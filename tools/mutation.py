@@ -766,7 +766,13 @@ def _statuses(copy: Path) -> dict[str, str]:
     return {n: s for n, s in status.items() if any(fnmatch.fnmatch(n, p) for p in FULL_SCOPE)}
 
 
-def full(jobs: int, workdir: Path | None, keep: bool, survivors_only: bool = False) -> float:
+def full(
+    jobs: int,
+    workdir: Path | None,
+    keep: bool,
+    survivors_only: bool = False,
+    score_only: bool = False,
+) -> float:
     try:
         import mutmut  # noqa: F401
     except ImportError:
@@ -777,7 +783,7 @@ def full(jobs: int, workdir: Path | None, keep: bool, survivors_only: bool = Fal
         copy = work / "tree"
         if not copy.exists():
             copy = _make_copy(work, "tree")
-        else:  # a kept work directory: refresh sources and tests, keep mutmut's cache
+        elif not score_only:  # a kept work directory: refresh sources and tests, keep the cache
             for item in COPY:
                 src, dst = ROOT / item, copy / item
                 if src.is_dir():
@@ -793,7 +799,7 @@ def full(jobs: int, workdir: Path | None, keep: bool, survivors_only: bool = Fal
             print(f"rerunning the {len(names)} mutants in scope not killed last time")
         print(f"full mode: mutmut in {copy} ({jobs} children); this takes a while")
         code, out, secs = 0, "", 0.0
-        if names:
+        if names and not score_only:
             code, out, secs = _mutmut(copy, "run", "--max-children", str(jobs), *names)
         (work / "mutmut-run.log").write_text(out)
         if code != 0:
@@ -815,6 +821,13 @@ def full(jobs: int, workdir: Path | None, keep: bool, survivors_only: bool = Fal
         )
         for n, s in sorted(other.items()):
             print(f"  {s:10s} {n}")
+        unchecked = [n for n, s in other.items() if s == "not checked"]
+        checked = total - len(unchecked)
+        if unchecked:
+            print(
+                f"{len(unchecked)} mutants not checked (run interrupted); over the "
+                f"{checked} checked: {len(killed) / checked:.3f}"
+            )
         score = len(killed) / total if total else 1.0
         print(f"mutation_score: {score:.3f}")
         if keep or not own:
@@ -839,6 +852,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workdir", type=Path, help="full: reuse this mutmut work directory")
     ap.add_argument("--keep", action="store_true", help="full: keep the mutmut work directory")
     ap.add_argument(
+        "--score-only",
+        action="store_true",
+        help="full, with --workdir of an earlier run: recompute the score, run nothing",
+    )
+    ap.add_argument(
         "--survivors-only",
         action="store_true",
         help="full, with --workdir of an earlier run: rerun only the mutants it did not kill",
@@ -852,7 +870,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.quick:
         quick(max(1, args.jobs), args.only)
     else:
-        full(max(1, args.jobs), args.workdir, args.keep, args.survivors_only)
+        full(max(1, args.jobs), args.workdir, args.keep, args.survivors_only, args.score_only)
     return 0
 
 
