@@ -176,18 +176,28 @@ def test_noise_drms_and_headline_add_the_east_and_north_variances(engine):
     assert m["error_budget"]["vrw"] == pytest.approx(drms[-1] / NMI, rel=1e-8)
 
 
-def test_alignment_simulated_measurement_noise_has_the_zupt_sigma():
-    """Without process noise the alignment filter is a batch least-squares fit, and the
-    error of its velocity estimate right after a zero-velocity update comes from the
-    simulated measurement noise alone; the filter's sigma is built from the same
-    ``zupt_sigma``. Over 12 seeded runs the normalised squared velocity errors must be
-    chi-square with 24 degrees of freedom (two-sided 99.8 % band)."""
+@pytest.mark.parametrize(
+    "vrw, zupt_sigma",
+    [(0.0, 1e-3), (5 * MICRO_G, 1e-5)],
+    ids=["measurement-noise", "process-noise"],
+)
+def test_alignment_simulated_noise_matches_the_filter_noise_model(vrw, zupt_sigma):
+    """The error of the alignment filter's velocity estimate right after a zero-velocity
+    update, normalised by its sigma, over 12 seeded runs: chi-square with 24 degrees of
+    freedom (two-sided 99.8 % band). Without process noise the error comes from the
+    simulated measurement noise alone (zupt_sigma 1 mm/s); with a 5 ug/sqrt(Hz) VRW and
+    a 10 um/s ZUPT it comes from the simulated process noise (5e-5 m/s per step against
+    1e-5). Either simulated noise at the wrong level (a variance where a sigma belongs:
+    1e-6 instead of 1e-3, 2.5e-9 instead of 5e-5) leaves the errors far below their
+    sigma: total ~ 0."""
     from scipy.stats import chi2
 
     from inserr.alignment.filter import STATES, Prior, Settings, run_alignment
 
     site = Site.from_degrees(34.0)
-    imu = ImuErrors(gyro_bias=np.full(3, 0.003 * DEG_PER_HOUR), accel_bias=np.full(3, 30 * MICRO_G))
+    imu = ImuErrors(
+        gyro_bias=np.full(3, 0.003 * DEG_PER_HOUR), accel_bias=np.full(3, 30 * MICRO_G), vrw=vrw
+    )
     prior = Prior(gyro_bias=imu.gyro_bias, accel_bias=imu.accel_bias)
     tl = Timeline.static(np.eye(3), 60.0)
     idx = [STATES.index("dv_e"), STATES.index("dv_n")]
@@ -196,13 +206,12 @@ def test_alignment_simulated_measurement_noise_has_the_zupt_sigma():
     n_runs = 12
     for k in range(n_runs):
         truth0 = prior.sigma() * rng.standard_normal(len(STATES))
-        res = run_alignment(site, tl, imu, prior, Settings(seed=200 + k), truth0=truth0)
+        settings = Settings(seed=200 + k, zupt_sigma=zupt_sigma)
+        res = run_alignment(site, tl, imu, prior, settings, truth0=truth0)
         e = (res.estimate[-1] - res.truth[-1])[idx]
         p = res.p_final[np.ix_(idx, idx)]
         total += float(e @ np.linalg.solve(p, e))
     dof = 2 * n_runs
-    # A measurement noise of zupt_sigma^2 instead of zupt_sigma (1e-6 m/s, not 1e-3)
-    # leaves the velocity errors ~1000 x below their sigma: total ~ 0.
     assert chi2.ppf(0.001, dof) < total < chi2.ppf(0.999, dof)
 
 
