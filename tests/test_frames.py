@@ -385,7 +385,9 @@ def test_misalignment_sources_keep_their_names_and_signs_in_the_budget():
 
 
 def test_fast_engine_on_a_schedule_equals_the_exact_engine_on_its_timeline():
-    """A dual-axis table on a turned, tilted static base with every kind of IMU error:
+    """P2's four-position table (stops at -135, 45, 135, -45 deg: table matrices that are
+    not symmetric, unlike the half turns of the dual-axis tables, so M and M^T differ) on a
+    turned, tilted static base with every kind of IMU error:
     the fast engine reads the schedule (vehicle attitude seen through the table, never
     sub-stepped), the exact engine the timeline built from it (node attitudes from the
     gimbal geometry, rates from the gimbal axes). Two independent paths from the table
@@ -397,7 +399,7 @@ def test_fast_engine_on_a_schedule_equals_the_exact_engine_on_its_timeline():
     motion = Motion(heading=0.4, pitch=3 * DEG, roll=-2 * DEG)
     duration = 3600.0
     history = ScheduleHistory(
-        build_scheme("eight-position", 6 * DEG, 120.0).plan(motion, duration), motion, duration
+        build_scheme("four-position", 6 * DEG, 120.0).plan(motion, duration), motion, duration
     )
     rng = np.random.default_rng(3)
     imu = ImuErrors(
