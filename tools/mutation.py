@@ -348,8 +348,8 @@ QUICK: tuple[Mutation, ...] = (
         "fast engine: gyro bias drives psi with +C e_i",
         (
             FAST,
-            'g1 = np.einsum("ra,jrai->jri", g, y1)',
-            'g1 = -np.einsum("ra,jrai->jri", g, y1)',
+            "g1 = (y1 * g[None, :, :, None]).sum(axis=2)",
+            "g1 = -(y1 * g[None, :, :, None]).sum(axis=2)",
         ),
     ),
     _m(
