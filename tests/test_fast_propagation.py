@@ -261,31 +261,39 @@ def test_free_vertical_channel_agrees_over_a_short_run():
 def test_exact_engine_converges_to_the_fast_one_as_its_substep_shrinks(scheme):
     dur = 1800.0
     hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, dur), SWING, dur)
-    fast = analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0).nav
-    errs = []
-    navs = []
-    for h in (1.0, 0.5):
-        ex = analyze_drift(
-            SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0, engine="exact", substep=h
-        ).nav
-        navs.append(ex)
-        errs.append(_relative(ex, fast))
-    # Second order: halving h divides the error by 4 (3 to 5 allowed: the error is not
-    # exactly h^2 where stops end between sub-step nodes).
-    assert 3.0 < errs[0] / errs[1] < 5.0
-    richardson = navs[1] + (navs[1] - navs[0]) / 3.0
-    assert _relative(richardson, fast) < errs[1] / 20.0
+    fast = analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0)
+    n = len(fast.t_cov)
+
+    def views(r):  # signed response (fine grid) and per-source responses (coarse grid)
+        return r.nav, r.source_horizontal.reshape(n, -1)
+
+    runs = [
+        views(analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0, engine="exact",
+                            substep=h))
+        for h in (1.0, 0.5)
+    ]  # fmt: skip
+    for which, ref in enumerate(views(fast)):
+        errs = [_relative(r[which], ref) for r in runs]
+        # Second order: halving h divides the error by 4 (3 to 5 allowed: the error is
+        # not exactly h^2 where stops end between sub-step nodes).
+        assert 3.0 < errs[0] / errs[1] < 5.0
+        richardson = runs[1][which] + (runs[1][which] - runs[0][which]) / 3.0
+        assert _relative(richardson, ref) < errs[1] / 20.0
 
 
-@pytest.mark.parametrize("dt_out", [1.0, 7.0])
-def test_phase_cache_equals_direct_sampling(dt_out):
+@pytest.mark.parametrize(
+    ("scheme", "dt_out"),
+    [("nulling-two-position", 1.0), ("nulling-two-position", 7.0), ("four-position", 1.0),
+     ("flexible-two-position", 1.0)],
+)  # fmt: skip
+def test_phase_cache_equals_direct_sampling(scheme, dt_out):
     # Stops on a periodic vehicle reuse the vehicle part per phase; forbidding that
     # (no phase step) must change nothing but round-off. A 7 s output step does not
     # divide the 20 s phase step: fine times then fall anywhere in the cached windows.
+    # Four-position and the flexible rule stop at table angles whose matrices are not
+    # symmetric (a transposed table would show), nulling at 0 and 180 deg.
     dur = 3600.0
-    hist = ScheduleHistory(
-        build_scheme("nulling-two-position", 6 * DEG, 300.0).plan(SWING, dur), SWING, dur
-    )
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, dur), SWING, dur)
     model = ErrorModel(SITE, Layout(scale_misalignment=True))
     from inserr.model.error_sources import constant_sources, source_set
 
