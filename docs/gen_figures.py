@@ -10,11 +10,11 @@ look at them outside the site::
 
 from __future__ import annotations
 
-import io
 import sys
 from pathlib import Path
 
 from inserr.drift import figures as plots
+from inserr.output.figure_style import png_bytes
 from inserr.scenario.schema import Scenario, scenario_from_dict
 from inserr.schemes.catalogue import SCHEMES
 
@@ -56,11 +56,9 @@ def scheme_figure(name: str) -> bytes:
         if name in CLOSED_LOOP
         else "static base"
     )
-    fig = plots.table_angle(scen.timeline(), title=f"{name}: {RATE}, stops {STOP}, {where}")
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=90, bbox_inches="tight")
-    plots.close(fig)
-    return buf.getvalue()
+    return png_bytes(
+        plots.table_angle(scen.timeline(), title=f"{name}: {RATE}, stops {STOP}, {where}")
+    )
 
 
 def scheme_figures() -> dict[str, bytes]:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -47,4 +48,11 @@ def test_analysis_runs_from_its_scenario_file(script, extra, heading, tmp_path):
     assert heading in text
     assert "nan" not in text.lower().split()  # no missing figure leaked into the prose
     json.loads((out / "results.json").read_text(encoding="utf-8"))
-    assert list(out.glob("*.png"))
+    pngs = sorted(out.glob("*.png"))
+    assert pngs
+    # Written by the one report writer (inserr.output.report): the HTML page beside the
+    # Markdown embeds every figure the write-up links.
+    page = (out / "report.html").read_text(encoding="utf-8")
+    linked = set(re.findall(r"\]\(([\w.-]+\.png)\)", text))
+    assert linked <= {p.name for p in pngs}
+    assert page.count("src='data:image/png;base64,") == len(linked)

@@ -31,6 +31,7 @@ from inserr.core.units import ARCSEC, DEG, DEG_PER_HOUR, MICRO_G, PPM
 from inserr.drift.analysis import analyze_drift, output_grid
 from inserr.model import fast_propagation as fp
 from inserr.model import quadrature as q
+from inserr.model.attitude_history import TimelineHistory
 from inserr.model.discretization import Discretizer
 from inserr.model.exact_propagation import propagate_covariance
 from inserr.model.modal import NavModes
@@ -260,31 +261,39 @@ def test_free_vertical_channel_agrees_over_a_short_run():
 def test_exact_engine_converges_to_the_fast_one_as_its_substep_shrinks(scheme):
     dur = 1800.0
     hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, dur), SWING, dur)
-    fast = analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0).nav
-    errs = []
-    navs = []
-    for h in (1.0, 0.5):
-        ex = analyze_drift(
-            SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0, engine="exact", substep=h
-        ).nav
-        navs.append(ex)
-        errs.append(_relative(ex, fast))
-    # Second order: halving h divides the error by 4 (3 to 5 allowed: the error is not
-    # exactly h^2 where stops end between sub-step nodes).
-    assert 3.0 < errs[0] / errs[1] < 5.0
-    richardson = navs[1] + (navs[1] - navs[0]) / 3.0
-    assert _relative(richardson, fast) < errs[1] / 20.0
+    fast = analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0)
+    n = len(fast.t_cov)
+
+    def views(r):  # signed response (fine grid) and per-source responses (coarse grid)
+        return r.nav, r.source_horizontal.reshape(n, -1)
+
+    runs = [
+        views(analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0, engine="exact",
+                            substep=h))
+        for h in (1.0, 0.5)
+    ]  # fmt: skip
+    for which, ref in enumerate(views(fast)):
+        errs = [_relative(r[which], ref) for r in runs]
+        # Second order: halving h divides the error by 4 (3 to 5 allowed: the error is
+        # not exactly h^2 where stops end between sub-step nodes).
+        assert 3.0 < errs[0] / errs[1] < 5.0
+        richardson = runs[1][which] + (runs[1][which] - runs[0][which]) / 3.0
+        assert _relative(richardson, ref) < errs[1] / 20.0
 
 
-@pytest.mark.parametrize("dt_out", [1.0, 7.0])
-def test_phase_cache_equals_direct_sampling(dt_out):
+@pytest.mark.parametrize(
+    ("scheme", "dt_out"),
+    [("nulling-two-position", 1.0), ("nulling-two-position", 7.0), ("four-position", 1.0),
+     ("flexible-two-position", 1.0)],
+)  # fmt: skip
+def test_phase_cache_equals_direct_sampling(scheme, dt_out):
     # Stops on a periodic vehicle reuse the vehicle part per phase; forbidding that
     # (no phase step) must change nothing but round-off. A 7 s output step does not
     # divide the 20 s phase step: fine times then fall anywhere in the cached windows.
+    # Four-position and the flexible rule stop at table angles whose matrices are not
+    # symmetric (a transposed table would show), nulling at 0 and 180 deg.
     dur = 3600.0
-    hist = ScheduleHistory(
-        build_scheme("nulling-two-position", 6 * DEG, 300.0).plan(SWING, dur), SWING, dur
-    )
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, dur), SWING, dur)
     model = ErrorModel(SITE, Layout(scale_misalignment=True))
     from inserr.model.error_sources import constant_sources, source_set
 
@@ -366,3 +375,112 @@ def test_vertical_gyro_bias_drifts_east_at_r_b_sin_cos_and_leaves_heading_bounde
     expected = site.r_n * b * math.sin(lat) * math.cos(lat)
     assert math.isclose(slope_e, expected, rel_tol=rtol)
     assert abs(slope_h) < 1e-9 * b  # rad/s: no secular heading drift
+
+
+def _gm_reference(model_site, tl, sigma, tau, sensor, t, vertical="clamped"):
+    """Step-by-step covariance of the augmented model (GM states started stationary)."""
+    model = ErrorModel(
+        model_site,
+        Layout(bias=False, bias_instability=True),
+        vertical=vertical,
+        gyro_correlation_time=tau,
+        accel_correlation_time=tau,
+    )
+    g, a = (sigma, 0.0) if sensor == "gyro" else (0.0, sigma)
+    disc = Discretizer(model, model.noise_intensity(0.0, 0.0, g, a))
+    p0 = np.zeros((model.layout.n,) * 2)
+    bias = model.layout["bg" if sensor == "gyro" else "ba"]
+    p0[bias, bias] = sigma**2 * np.eye(3)
+    return propagate_covariance(disc, tl, p0, t)[:, :9, :9]
+
+
+def _cov_close(got, ref, rtol):
+    """Correlation-normalised comparison of the states that carry variance.
+
+    States are compared on the balanced scale (psi in metres of the Earth's surface, dv
+    in metres per Schuler radian, dr in metres); a state whose spread is below 1e-6 of
+    the largest carries only round-off (e.g. psi under accelerometer noise) and is left
+    out.
+    """
+    d = np.sqrt(np.maximum(np.diagonal(ref, axis1=1, axis2=2), 0.0))[-1]
+    ws = math.sqrt(SITE.g / SITE.mean_radius)
+    bal = d * np.repeat([SITE.mean_radius, 1.0 / ws, 1.0], 3)
+    live = bal > 1e-6 * bal.max()
+    scale = np.outer(d, d)[np.ix_(live, live)]
+    err = np.abs(got[-1] - ref[-1])[np.ix_(live, live)] / scale
+    return float(err.max()) < rtol
+
+
+@pytest.mark.parametrize("sensor", ["gyro", "accel"])
+@pytest.mark.parametrize("name", ["swing-two-position", "static-four-position-modified"])
+def test_gauss_markov_covariance_equals_the_step_engine(name, sensor):
+    # Same piecewise-constant-rate problem (the timeline): the augmented step-by-step
+    # covariance (Van Loan per step) against the fast engine's cross-covariance form.
+    tl = TIMELINES[name]
+    t = output_grid(tl.duration, 60.0)
+    sigma = 0.005 * DEG_PER_HOUR if sensor == "gyro" else 20 * MICRO_G
+    ref = _gm_reference(SITE, tl, sigma, 1800.0, sensor, t)
+    got = fp.gauss_markov_covariance(
+        ErrorModel(SITE), TimelineHistory(tl), sigma, 1800.0, sensor, t
+    )
+    # Both exact for this problem; 1e-7 leaves room for the step engine's accumulated
+    # round-off (as in test_fast_equals_exact_on_the_same_timeline).
+    assert _cov_close(got, ref, 1e-7)
+
+
+def test_gauss_markov_stationary_limit_equals_white_noise():
+    # A bias much shorter-correlated than the run is white noise of PSD 2 sigma^2 tau
+    # (its integral over a time >> tau): compare with the white-noise closed form.
+    tl = Timeline.static(np.eye(3), 4 * 3600.0)
+    t = output_grid(tl.duration, 600.0)
+    sigma, tau = 0.05 * DEG_PER_HOUR, 2.0
+    got = fp.gauss_markov_covariance(ErrorModel(SITE), TimelineHistory(tl), sigma, tau, "gyro", t)
+    arw = math.sqrt(2.0 * sigma**2 * tau)
+    white = fp.white_noise_covariance(ErrorModel(SITE, Layout(bias=False)), arw, 0.0, t)
+    # Relative difference O(tau / T) for the variance growth: 2 s against hours.
+    assert np.allclose(got[-1], white[-1], rtol=2e-3, atol=1e-3 * np.abs(white[-1]).max())
+
+
+@pytest.mark.parametrize(
+    ("motion", "scheme"),
+    [(Motion(heading=0.3, pitch=0.02, roll=-0.03), "sixteen-position"),
+     (Motion(), "continuous"),
+     (SWING, "two-position"),
+     (SWING, "none"),
+     (Motion(), "four-position")],
+)  # fmt: skip
+def test_periodic_lifting_equals_the_whole_run(monkeypatch, motion, scheme):
+    # A periodic history (open-loop table on a static or periodic vehicle) is computed
+    # for one period and copied: identical to computing every window of the run.
+    dur = 6 * 3600.0
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 120.0).plan(motion, dur), motion, dur)
+    assert hist.period() is not None
+    # The lifting period is a whole number of the history's periods that both output
+    # grids divide (four-position: a 570 s cycle lifts with 1140 s on the 60 s grid).
+    lift = fp._lifting(hist, output_grid(dur, 1.0), output_grid(dur, 60.0))
+    assert lift is not None
+    ratio = lift[1] / hist.period()[1]
+    assert abs(ratio - round(ratio)) < 1e-9 and abs(lift[1] / 60.0 - round(lift[1] / 60.0)) < 1e-9
+    lifted = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    monkeypatch.setattr(fp, "_lifting", lambda *a: None)
+    whole = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    assert _relative(lifted.nav, whole.nav) < 1e-10
+    n = len(whole.t_cov)
+    assert (
+        _relative(lifted.source_horizontal.reshape(n, -1), whole.source_horizontal.reshape(n, -1))
+        < 1e-10
+    )
+
+
+def test_history_period_is_the_common_period_of_table_and_vehicle():
+    # Two-position, 300 s stops at 6 deg/s: cycle 4 (300 + 30) = 1320 s; a 120 s swing
+    # divides it (11 swings); a 90 s swing does not: 1320 and 90 meet at 3960 s.
+    table = build_scheme("two-position", 6 * DEG, 300.0).plan(SWING, 72 * 3600.0)
+    assert ScheduleHistory(table, SWING, 72 * 3600.0).period() == (0.0, 1320.0)
+    swing90 = YawSwing(amplitude=6 * DEG, period=90.0)
+    t90 = build_scheme("two-position", 6 * DEG, 300.0).plan(swing90, 72 * 3600.0)
+    t0, p = ScheduleHistory(t90, swing90, 72 * 3600.0).period()
+    assert t0 == 0.0 and math.isclose(p, 3960.0, rel_tol=1e-12)
+    # A closed-loop rule has no period.
+    flex = build_scheme("flexible-two-position", 6 * DEG, 300.0).plan(SWING, 7200.0)
+    assert ScheduleHistory(flex, SWING, 7200.0).period() is None

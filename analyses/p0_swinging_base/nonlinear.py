@@ -341,19 +341,15 @@ def _case_row(info: dict) -> dict:
 
 def figure(cases: list[tuple[dict, dict]], title: str):
     """Linear (solid) vs nonlinear (dashed) horizontal error per scheme; difference below."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from inserr.core.units import HOUR, NMI
+    from inserr.output import figure_style as style
 
-    fig, (ax, axd) = plt.subplots(
-        2, 1, figsize=(9, 7), sharex=True, gridspec_kw={"height_ratios": [2, 1]}
+    fig, (ax, axd) = style.subplots(
+        2, 1, height=7.0, sharex=True, gridspec_kw={"height_ratios": [2, 1]}
     )
     for i, (info, d) in enumerate(cases):
-        c = f"C{i}"
         name = info["scheme"]
+        c = style.scheme_color(name, i)
         ax.plot(
             d["lin_t"] / HOUR,
             np.hypot(*d["lin_dr"].T) / NMI,
@@ -380,14 +376,14 @@ def figure(cases: list[tuple[dict, dict]], title: str):
             label=name,
         )
     ax.set_ylabel("horizontal error (nmi)")
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=7, ncol=2)
+    ax.set_title(title)
+    ax.legend(ncol=2)
     axd.set_ylabel("|dr_nl - dr_lin| (m)")
     axd.set_xlabel("time (h)")
-    axd.legend(fontsize=7)
+    axd.legend()
     for a in (ax, axd):
-        a.grid(alpha=0.3)
-    return fig
+        style.grid(a)
+    return style.finish(fig)
 
 
 DESCRIPTION = (
@@ -664,7 +660,8 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
 
     from inserr.core.units import NMI
-    from inserr.output.report import dumps, write_text_atomic
+    from inserr.output.figure_style import png_bytes
+    from inserr.output.report import dumps, write_bytes_atomic, write_text_atomic
     from inserr.reference.strapdown import require_pyins
 
     require_pyins()
@@ -731,9 +728,7 @@ def main(argv: list[str] | None = None) -> int:
     write_text_atomic(out_dir / EXPLANATION_FILE, explanation(result))
     for k, cases in enumerate(by_exp.values(), start=1):
         fig = figure(cases, f"{cases[0][0]['experiment']}: linear (solid) vs nonlinear (dashed)")
-        tmp = out_dir / f".nonlinear_exp{k}.tmp.png"
-        fig.savefig(tmp, dpi=110, bbox_inches="tight")
-        os.replace(tmp, out_dir / f"nonlinear_exp{k}.png")
+        write_bytes_atomic(out_dir / f"nonlinear_exp{k}.png", png_bytes(fig))
     for r in rows:
         lin, nl = r["linear_max_horizontal_error_nmi"], r["nonlinear_max_horizontal_error_nmi"]
         print(

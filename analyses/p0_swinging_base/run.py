@@ -38,6 +38,7 @@ from inserr.drift import figures as plots
 from inserr.drift.analysis import DriftResult, analyze_drift
 from inserr.drift.study import describe
 from inserr.drift.unknown_signs import rms_norm, worst_case_norm
+from inserr.output import figure_style as style
 from inserr.output.report import Report, dumps, write_text_atomic
 from inserr.scenario.schema import Scenario, load_scenario
 from inserr.schemes.composition import build_timeline
@@ -253,7 +254,7 @@ def diagnose(case_run: dict) -> dict:
 # --- figures ----------------------------------------------------------------------------
 def horizontal_figure(runs: dict[str, dict], budget: str, title: str) -> Figure:
     """RMS (unknown signs) horizontal error of every scheme for one budget."""
-    fig = Figure(figsize=(8, 4.5))
+    fig = style.new_figure(style.WIDTH, 4.5)
     ax = fig.subplots()
     for i, (label, r) in enumerate(runs.items()):
         res = r["result"]
@@ -262,21 +263,21 @@ def horizontal_figure(runs: dict[str, dict], budget: str, title: str) -> Figure:
         ax.plot(
             res.t_cov / HOUR,
             rms_norm(res.source_horizontal[:, keep]) / NMI,
-            color=f"C{i}",
+            color=style.scheme_color(label, i),
             lw=1.0,
             label=label,
         )
     ax.set_xlabel("time (h)")
     ax.set_ylabel("RMS horizontal error, unknown signs (nmi)")
-    ax.set_title(title, fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    return fig
+    ax.set_title(title)
+    style.grid(ax)
+    ax.legend()
+    return style.finish(fig)
 
 
 def table_angle_figure(runs: dict[str, dict], hours: float = 2.0) -> Figure:
     """Outer-gimbal angle over the first hours: where the flexible rule drifts away."""
-    fig = Figure(figsize=(8, 4))
+    fig = style.new_figure(style.WIDTH, 4.0)
     ax = fig.subplots()
     for i, (label, r) in enumerate(runs.items()):
         if label == "none":
@@ -284,18 +285,18 @@ def table_angle_figure(runs: dict[str, dict], hours: float = 2.0) -> Figure:
         s, table = r["scenario"], r["table"]
         t = np.linspace(0.0, min(hours * HOUR, s.duration), 4000)
         a, _ = table.angles_at(t, s.motion)
-        ax.plot(t / 60.0, a / DEG, color=f"C{i}", lw=0.9, label=label)
+        ax.plot(t / 60.0, a / DEG, color=style.scheme_color(label, i), lw=0.9, label=label)
     ax.set_xlabel("time (min)")
     ax.set_ylabel("table (outer) angle (deg)")
-    ax.set_title("Table angle, first hours of experiment 1", fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    return fig
+    ax.set_title("Table angle, first hours of experiment 1")
+    style.grid(ax)
+    ax.legend()
+    return style.finish(fig)
 
 
 def sweep_figure(points: list[dict], amplitudes) -> Figure:
     """RMS horizontal error against swing period, one panel per yaw-rate amplitude."""
-    fig = Figure(figsize=(8, 3.2 * len(amplitudes)))
+    fig = style.new_figure(style.WIDTH, 3.2 * len(amplitudes))
     axes = np.atleast_1d(fig.subplots(len(amplitudes), 1, sharex=True))
     labels = list(dict.fromkeys(p["label"] for p in points))
     for ax, amp in zip(axes, amplitudes, strict=True):
@@ -308,7 +309,7 @@ def sweep_figure(points: list[dict], amplitudes) -> Figure:
                 [p["period_s"] for p in pts],
                 [p["rms_horizontal_nmi"] for p in pts],
                 "o-",
-                color=f"C{i}",
+                color=style.scheme_color(label, i),
                 ms=3,
                 lw=1,
                 label=label,
@@ -316,11 +317,11 @@ def sweep_figure(points: list[dict], amplitudes) -> Figure:
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_ylabel("RMS horiz. (nmi)")
-        ax.set_title(f"yaw-rate amplitude {amp} deg/s (z-gyro bias removed)", fontsize=9)
-        ax.grid(alpha=0.3, which="both")
-    axes[0].legend(fontsize=8)
+        ax.set_title(f"yaw-rate amplitude {amp} deg/s (z-gyro bias removed)")
+        style.grid(ax, which="both")
+    axes[0].legend()
     axes[-1].set_xlabel("swing period (s)")
-    return fig
+    return style.finish(fig)
 
 
 # --- verdicts ---------------------------------------------------------------------------

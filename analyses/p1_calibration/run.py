@@ -31,6 +31,7 @@ from inserr.calibration.estimation import (
     parameter_unit,
     positioning_sigma,
 )
+from inserr.calibration.figures import deviation_figure, std_figure
 from inserr.calibration.inputs import calibration_inputs
 from inserr.calibration.position_sets import (
     candidate_tables,
@@ -41,12 +42,10 @@ from inserr.calibration.position_sets import (
 from inserr.calibration.summary import (
     PARAMETER_HEADER,
     calibration_summary,
-    deviation_figure,
     parameter_rows,
     sensitivity_axes_text,
     sensitivity_rows,
     sensitivity_table,
-    std_figure,
 )
 from inserr.calibration.two_axis_table import (
     BUILTIN_SETS,
@@ -58,6 +57,7 @@ from inserr.core.earth import Site
 from inserr.core.errors import InputError
 from inserr.core.imu import ImuErrors
 from inserr.core.units import ARCSEC, DEG_PER_SQRT_HOUR
+from inserr.output import figure_style as style
 from inserr.output.progress import progress
 from inserr.output.report import Report, check_report_dir
 from inserr.scenario.schema import Key, Scenario, load_scenario
@@ -128,12 +128,11 @@ def compare(p4: np.ndarray, p6: np.ndarray, tol: float) -> dict[str, Any]:
 
 def sweep_figure(x, series, xlabel, title, logx=True, logy=True) -> Figure:
     """Three panels (sf, mis, bias): MC class-RMS std (markers) and prediction (lines)."""
-    fig = Figure(figsize=(13, 4))
-    axes = fig.subplots(1, 3)
+    fig, axes = style.subplots(1, 3, width=style.WIDE, height=4.0)
     units = {"sf": "ppm", "mis": "arcsec", "bias": "deg/h"}
     for ax, cls in zip(axes, CLASSES, strict=True):
         for k, (label, s) in enumerate(series.items()):
-            color = f"C{k}"
+            color = style.series_color(k)
             xs = s.get("x", x)
             ax.plot(xs, [v[cls] for v in s["mc"]], "o", color=color, label=f"{label} MC")
             ax.plot(xs, [v[cls] for v in s["pred"]], "-", color=color, label=f"{label} predicted")
@@ -143,11 +142,10 @@ def sweep_figure(x, series, xlabel, title, logx=True, logy=True) -> Figure:
             ax.set_yscale("log")
         ax.set_xlabel(xlabel)
         ax.set_ylabel(f"RMS std of {cls} [{units[cls]}]")
-        ax.grid(True, which="both", lw=0.3)
-    axes[0].legend(fontsize=7)
-    fig.suptitle(title)
-    fig.tight_layout()
-    return fig
+        style.grid(ax, which="both")
+    axes[0].legend()
+    style.suptitle(fig, title)
+    return style.finish(fig)
 
 
 def fmt(v: float, digits: int = 3) -> str:

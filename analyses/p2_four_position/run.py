@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 import time
 from pathlib import Path
@@ -20,10 +19,12 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from inserr.core.errors import InputError
 from inserr.core.units import ARCMIN, DEG, DEG_PER_HOUR, G0, HOUR, MICRO_G
 from inserr.drift import figures as plots
 from inserr.drift.study import SchemeRun, describe, run_scheme
-from inserr.output.report import Report
+from inserr.output import figure_style as style
+from inserr.output.report import Report, check_report_dir
 from inserr.scenario.schema import Scenario, load_scenario
 from inserr.schemes.cycle_integrals import cycle_integrals
 
@@ -90,18 +91,23 @@ def cycle_table(scen: Scenario) -> dict:
 
 def heading_figure(runs: dict[str, dict[str, SchemeRun]]) -> Figure:
     """Heading error of every scheme, full budget and without the up-gyro bias."""
-    fig = Figure(figsize=(8, 6))
-    axes = fig.subplots(2, 1, sharex=True)
+    fig, axes = style.subplots(2, 1, height=6.0, sharex=True)
     for ax, (key, label) in zip(axes, VARIANTS.items(), strict=True):
         for i, (name, run) in enumerate(runs[key].items()):
             r = run.result
-            ax.plot(r.t / HOUR, r.attitude[:, 2] / ARCMIN, color=f"C{i}", lw=1.0, label=name)
+            ax.plot(
+                r.t / HOUR,
+                r.attitude[:, 2] / ARCMIN,
+                color=style.scheme_color(name, i),
+                lw=1.0,
+                label=name,
+            )
         ax.set_ylabel("heading error (arcmin)")
-        ax.set_title(f"Heading (azimuth) error, {label}", fontsize=10)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.set_title(f"Heading (azimuth) error, {label}")
+        style.grid(ax)
+        ax.legend()
     axes[-1].set_xlabel("time (h)")
-    return fig
+    return style.finish(fig)
 
 
 def verdicts(s: dict, cyc: dict) -> list[str]:
@@ -260,7 +266,11 @@ def build(scen: Scenario, runs: dict[str, dict[str, SchemeRun]], cyc: dict, timi
             head = ", ".join(f"{k} {x:.3g}" for k, x in v["heading_budget_arcmin"].items())
             rep.paragraph(f"*{name}, {label}*: horizontal (nmi) {horiz}; heading (arcmin) {head}")
     budget = runs["full"]["four-position-modified"].metrics()["error_budget"]
-    fig = plots.error_budget(budget, title="Horizontal budget: four-position-modified, full")
+    fig = plots.error_budget(
+        budget,
+        title="Horizontal budget: four-position-modified, full",
+        scheme="four-position-modified",
+    )
     rep.figure(fig, "budget_modified_full", "Per-source RMS horizontal error at 72 h, modified")
     rep.paragraph("Run time: " + ", ".join(f"{k} {v:.1f} s" for k, v in timing.items()) + ".")
     rep.results = {
@@ -284,6 +294,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scenario", default=str(HERE / "scenario.toml"))
     ap.add_argument("--out", default=str(HERE / "results"))
     args = ap.parse_args(argv)
+    try:
+        check_report_dir(args.out, "--out")  # before any work: never replace a user's directory
+    except InputError as exc:
+        print(f"run.py: error: {exc}", file=sys.stderr)
+        return 2
     scen = load_scenario(args.scenario)
     runs: dict[str, dict[str, SchemeRun]] = {}
     timing = {}
@@ -295,8 +310,7 @@ def main(argv: list[str] | None = None) -> int:
             timing[f"{name} ({key})"] = time.perf_counter() - t0
             print(f"{key:11s} {name:24s} {timing[f'{name} ({key})']:.1f} s", file=sys.stderr)
     rep = build(scen, runs, cycle_table(scen), timing)
-    out = rep.write(args.out)
-    os.replace(out / "report.md", out / "REPORT.md")
+    out = rep.write(args.out, markdown_name="REPORT.md")
     print(out / "REPORT.md")
     return 0
 

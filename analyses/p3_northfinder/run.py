@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 import time
 from dataclasses import replace
@@ -34,8 +33,9 @@ from inserr.northfinder.filter import (
 from inserr.northfinder.inputs import northfinder_inputs
 from inserr.northfinder.instrument import Instrument, Pose, SensorGrade, simulate
 from inserr.northfinder.study import EQUATORIAL_BAND, POLAR_BAND, monte_carlo
+from inserr.output import figure_style as style
 from inserr.output.progress import progress
-from inserr.output.report import Report
+from inserr.output.report import Report, check_report_dir
 from inserr.scenario.schema import Key, load_scenario
 
 HERE = Path(__file__).resolve().parent
@@ -645,29 +645,32 @@ def rate_figure(r: dict, req_mil: float) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    fig = Figure(figsize=(7.5, 4.2))
+    fig = style.new_figure(style.WIDTH, 4.2)
     ax = fig.add_subplot()
+    ref = style.ROLE_COLORS["reference"]
     rates = [row["rate_deg_s"] for row in r["rows"]]
-    for label, style in (("default", "o-"), ("stress", "s-")):
+    for k, (label, marker) in enumerate((("default", "o-"), ("stress", "s-"))):
         ax.loglog(
             rates,
             [row[f"{label}_mc_sigma_mil"] for row in r["rows"]],
-            style,
+            marker,
+            color=style.series_color(k),
             label=f"Monte Carlo, {label} gyro bias instability",
         )
-        ax.loglog(rates, [row[f"{label}_crlb_bi_mil"] for row in r["rows"]], "k:", lw=0.8)
+        ax.loglog(rates, [row[f"{label}_crlb_bi_mil"] for row in r["rows"]], ":", color=ref, lw=0.8)
     ax.loglog(
         rates,
         [row["default_crlb_mil"] for row in r["rows"]],
-        "k--",
+        "--",
+        color=ref,
         label="CRLB, white noise (dotted: + bias instability)",
     )
-    ax.axhline(req_mil, color="r", lw=0.8, label="requirement")
+    ax.axhline(req_mil, color=style.ROLE_COLORS["threshold"], lw=0.8, label="requirement")
     ax.set_xlabel("table rate [deg/s]")
     ax.set_ylabel("heading 1σ at the requirement time [mil]")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    return fig
+    style.grid(ax, which="both")
+    ax.legend()
+    return style.finish(fig)
 
 
 def grade_figure(g: dict, req_mil: float) -> Figure:
@@ -684,24 +687,40 @@ def grade_figure(g: dict, req_mil: float) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    fig = Figure(figsize=(7.5, 4.2))
+    fig = style.new_figure(style.WIDTH, 4.2)
     ax = fig.add_subplot()
     arw = [row["arw_deg_sqrt_h"] for row in g["rows"]]
-    ax.loglog(arw, [row["mc_sigma_mil"] for row in g["rows"]], "o-", label="Monte Carlo 1σ")
-    ax.loglog(arw, [row["crlb_mil"] for row in g["rows"]], "k--", label="CRLB")
-    ax.axhline(req_mil, color="r", lw=0.8, label="requirement")
+    ax.loglog(
+        arw,
+        [row["mc_sigma_mil"] for row in g["rows"]],
+        "o-",
+        color=style.series_color(0),
+        label="Monte Carlo 1σ",
+    )
+    ax.loglog(
+        arw,
+        [row["crlb_mil"] for row in g["rows"]],
+        "--",
+        color=style.ROLE_COLORS["reference"],
+        label="CRLB",
+    )
+    ax.axhline(req_mil, color=style.ROLE_COLORS["threshold"], lw=0.8, label="requirement")
     need = g["required"]
+    green = style.series_color(2)
     ax.axvline(
-        need["monte_carlo"]["arw_deg_sqrt_h"], color="g", lw=0.8, label="required ARW (Monte Carlo)"
+        need["monte_carlo"]["arw_deg_sqrt_h"],
+        color=green,
+        lw=0.8,
+        label="required ARW (Monte Carlo)",
     )
     ax.axvline(
-        need["crlb"]["arw_deg_sqrt_h"], color="g", ls=":", lw=0.8, label="required ARW (bound)"
+        need["crlb"]["arw_deg_sqrt_h"], color=green, ls=":", lw=0.8, label="required ARW (bound)"
     )
     ax.set_xlabel("gyro ARW [deg/√h] (bias and bias instability scaled alike)")
     ax.set_ylabel("heading 1σ at the requirement time [mil]")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    return fig
+    style.grid(ax, which="both")
+    ax.legend()
+    return style.finish(fig)
 
 
 def map_figure(m: dict) -> Figure:
@@ -716,7 +735,7 @@ def map_figure(m: dict) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    fig = Figure(figsize=(11, 4.4), layout="constrained")
+    fig = style.new_figure(style.WIDE, 4.4)
     h, lat = np.asarray(m["headings_deg"]), np.asarray(m["latitudes_deg"])
     for k, (key, label) in enumerate(
         (
@@ -730,7 +749,7 @@ def map_figure(m: dict) -> Figure:
         fig.colorbar(pcm, ax=ax, label=label)
         ax.set_xlabel("heading [deg]")
         ax.set_ylabel("latitude [deg]")
-    return fig
+    return style.finish(fig)
 
 
 def mc_map_figure(m: dict) -> Figure:
@@ -745,7 +764,7 @@ def mc_map_figure(m: dict) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    fig = Figure(figsize=(11, 4.4), layout="constrained")
+    fig = style.new_figure(style.WIDE, 4.4)
     cells = m["mc_cells"]
     hs = sorted({c["heading_deg"] for c in cells})
     ls = sorted({c["latitude_deg"] for c in cells})
@@ -762,7 +781,7 @@ def mc_map_figure(m: dict) -> Figure:
         ax.set_yticks(range(len(ls)), [f"{v:g}" for v in ls])
         ax.set_xlabel("heading [deg]")
         ax.set_ylabel("latitude [deg]")
-    return fig
+    return style.finish(fig)
 
 
 # --- report ----------------------------------------------------------------------------
@@ -1104,6 +1123,11 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     out = Path(args.out) if args.out else HERE / ("out" if args.quick else "results")
     try:
+        check_report_dir(out, "--out")  # before any work: never replace a user's directory
+    except InputError as exc:
+        print(f"run.py: error: {exc}", file=sys.stderr)
+        return 2
+    try:
         sc = load(Path(args.scenario), args.quick)
     except InputError as exc:
         print(f"run.py: error in {args.scenario}: {exc}", file=sys.stderr)
@@ -1119,9 +1143,7 @@ def main(argv: list[str] | None = None) -> int:
     results["quick"] = args.quick
     results["elapsed_s"] = time.perf_counter() - t0
     rep = build_report(sc, results, history, args.quick)
-    path = rep.write(out)
-    # The report module names its Markdown report.md; the analysis convention is REPORT.md.
-    os.replace(path / "report.md", path / "REPORT.md")
+    path = rep.write(out, markdown_name="REPORT.md")
     need = results["grade_sweep"]["required"]
     print(
         f"wrote {path} in {results['elapsed_s']:.0f} s; required ARW "

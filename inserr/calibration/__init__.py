@@ -1,1 +1,48 @@
-"""calibration."""
+"""Calibration: discrete multi-position calibration of a gyro and an accelerometer triad.
+
+* ``two_axis_table`` — two-axis tables and the IMU position sets they reach.
+* ``inputs`` — what a calibration study reads from a scenario.
+* ``estimation`` — measurement model, least squares, identifiability, Cramér-Rao bound,
+  Monte Carlo.
+* ``position_sets`` — the position-set designer: precision per unit of table time.
+* ``summary`` — JSON-ready summaries and tables in engineering units.
+* ``figures`` — P1-style deviation and repeatability figures.
+* ``report`` — the calibration report, for the one writer.
+"""
+
+from inserr.core.lazy import lazy_exports
+
+__getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "PositionSet": "inserr.calibration.two_axis_table",
+        "TwoAxisTable": "inserr.calibration.two_axis_table",
+        "builtin_set": "inserr.calibration.two_axis_table",
+        "load_position_set": "inserr.calibration.two_axis_table",
+        "CalibrationDesign": "inserr.calibration.estimation",
+        "MonteCarloConfig": "inserr.calibration.estimation",
+        "SensorResult": "inserr.calibration.estimation",
+        "monte_carlo": "inserr.calibration.estimation",
+        "design_sets": "inserr.calibration.position_sets",
+        "calibration_summary": "inserr.calibration.summary",
+        "build_report": "inserr.calibration.report",
+        "CalibrationInputs": "inserr.calibration.inputs",
+        "calibration_inputs": "inserr.calibration.inputs",
+    },
+)
+
+__all__ = [
+    "PositionSet",
+    "TwoAxisTable",
+    "builtin_set",
+    "load_position_set",
+    "CalibrationDesign",
+    "MonteCarloConfig",
+    "SensorResult",
+    "monte_carlo",
+    "design_sets",
+    "calibration_summary",
+    "build_report",
+    "CalibrationInputs",
+    "calibration_inputs",
+]

@@ -1,10 +1,11 @@
-"""Calibration results for people: JSON-ready summaries, tables and P1-style figures.
+"""Calibration results for people: JSON-ready summaries and tables.
 
 Engineering units throughout (this is an edge of the package): scale factors in ppm,
 misalignments in arcsec, gyro biases in deg/h, accelerometer biases in micro-g, inputs
 in deg/h and g, times in s; sensitivities to the table's positioning error in those
-units per arcsec (ppm/arcsec, arcsec/arcsec, (deg/h)/arcsec, ug/arcsec). Figures are
-built on :class:`matplotlib.figure.Figure` (no pyplot state, no display needed).
+units per arcsec (ppm/arcsec, arcsec/arcsec, (deg/h)/arcsec, ug/arcsec). The P1-style
+figures are in :mod:`inserr.calibration.figures`, the report in
+:mod:`inserr.calibration.report`.
 """
 
 from __future__ import annotations
@@ -13,7 +14,6 @@ import math
 from typing import Any
 
 import numpy as np
-from matplotlib.figure import Figure
 
 from inserr.calibration.estimation import (
     PARAMETER_NAMES,
@@ -29,7 +29,6 @@ from inserr.core.earth import Site
 from inserr.core.errors import InputError
 from inserr.core.imu import ImuErrors
 from inserr.core.units import ARCSEC, DEG_PER_HOUR, DEG_PER_SQRT_HOUR, G0, MICRO_G_PER_SQRT_HZ
-from inserr.output.report import Report
 
 
 def positions_summary(pset: PositionSet, site: Site) -> list[dict[str, Any]]:
@@ -420,90 +419,6 @@ def calibration_summary(
     return summary, results
 
 
-def deviation_figure(result: SensorResult, title: str) -> Figure:
-    """P1-style figure: estimate minus truth for every run, one panel per parameter.
-
-    The dashed lines mark +-1 predicted sigma (CRLB and positioning error combined).
-
-    Parameters
-    ----------
-    result : SensorResult
-        Monte Carlo result of one triad (SI).
-    title : str
-        Figure title.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        4 x 3 panels, deviations in ppm, arcsec, deg/h or micro-g against the run number.
-    """
-    fig = Figure(figsize=(12, 8))
-    axes = fig.subplots(4, 3, sharex=True)
-    dev = result.deviations
-    runs = np.arange(1, dev.shape[0] + 1)
-    for j, name in enumerate(PARAMETER_NAMES):
-        ax = axes.flat[j]
-        unit, f = parameter_unit(name, result.sensor)
-        if result.identifiability.identifiable[j]:
-            ax.plot(runs, dev[:, j] / f, ".", ms=3)
-            s = result.predicted_std[j] / f
-            ax.axhline(s, ls="--", lw=0.8, color="k")
-            ax.axhline(-s, ls="--", lw=0.8, color="k")
-            ax.axhline(0.0, lw=0.5, color="0.5")
-        else:
-            ax.text(0.5, 0.5, "not identifiable", ha="center", va="center", transform=ax.transAxes)
-        ax.set_title(f"{name} [{unit}]", fontsize=9)
-        ax.tick_params(labelsize=7)
-    for ax in axes[-1]:
-        ax.set_xlabel("run", fontsize=8)
-    fig.suptitle(title)
-    fig.tight_layout()
-    return fig
-
-
-def std_figure(results: dict[str, SensorResult], sensor: str, title: str) -> Figure:
-    """Bar chart per parameter: Monte Carlo std of each method beside its CRLB and prediction.
-
-    Values are relative to the predicted std of the first method, so the three units
-    (ppm, arcsec, deg/h) share one axis.
-
-    Parameters
-    ----------
-    results : dict
-        Label of each method -> ``{"gyro": SensorResult, "accel": SensorResult}``.
-    sensor : str
-        "gyro" or "accel".
-    title : str
-        Figure title.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        One group of bars per parameter (dimensionless ratios).
-    """
-    fig = Figure(figsize=(12, 4.5))
-    ax = fig.subplots()
-    names = list(PARAMETER_NAMES)
-    x = np.arange(len(names))
-    first = next(iter(results.values()))[sensor]
-    ref = np.where(np.isfinite(first.predicted_std), first.predicted_std, np.nan)
-    width = 0.8 / max(1, len(results))
-    for k, (label, res) in enumerate(results.items()):
-        r = res[sensor]
-        off = (k - (len(results) - 1) / 2) * width
-        ax.bar(x + off, r.std / ref, width, label=f"{label}: MC std")
-        ax.plot(x + off, r.crlb_sigma / ref, "k_", ms=12)
-        ax.plot(x + off, r.predicted_std / ref, "r_", ms=12)
-    ax.plot([], [], "k_", label="CRLB (noise only)")
-    ax.plot([], [], "r_", label="CRLB + positioning error")
-    ax.set_xticks(x, names, rotation=45, fontsize=8)
-    ax.set_ylabel(f"std / predicted std of {next(iter(results))}")
-    ax.set_title(title)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    return fig
-
-
 def parameter_rows(summary: dict[str, Any]) -> list[list[Any]]:
     """Rows of the per-parameter table, matching :data:`PARAMETER_HEADER`.
 
@@ -545,72 +460,3 @@ PARAMETER_HEADER = [
     "pos. sigma",
     "predicted",
 ]
-
-
-def build_report(summary: dict[str, Any], results: dict[str, SensorResult]) -> Report:
-    """A report with the position table, the parameter and sensitivity tables and figures.
-
-    Parameters
-    ----------
-    summary : dict
-        :func:`calibration_summary`'s summary (engineering units).
-    results : dict
-        :func:`calibration_summary`'s raw results (SI), for the figures.
-
-    Returns
-    -------
-    Report
-        Ready to :meth:`~inserr.output.report.Report.write`; ``results`` holds ``summary``.
-    """
-    rep = Report(f"Multi-position calibration: {summary['method']}")
-    s = summary["settings"]
-    rep.paragraph(
-        f"Latitude {summary['latitude_deg']:.4g} deg; {summary['n_positions']} positions; dwell "
-        f"{summary['dwell_time_s']:.0f} s + indexing {summary['indexing_time_s']:.0f} s = "
-        f"{summary['total_time_s']:.0f} s. {s['runs']} runs, seed {s['seed']}, ARW "
-        f"{s['arw_deg_per_sqrt_h']:.4g} deg/sqrt(h), VRW "
-        f"{s['vrw_ug_per_sqrt_hz']:.4g} ug/sqrt(Hz), positioning error uniform "
-        f"+-{s['positioning_error_arcsec']:.4g} arcsec ({s['positioning_model']})."
-    )
-    rep.heading("Positions")
-    rep.table(
-        ["name", "outer deg", "inner deg", "up", "dwell s", "gyro input deg/h", "accel input g"],
-        [
-            [
-                p["name"],
-                p["outer_deg"],
-                p["inner_deg"],
-                p["up_axis"],
-                p["dwell_s"],
-                ", ".join(f"{v:+.3f}" for v in p["gyro_input_deg_h"]),
-                ", ".join(f"{v:+.3f}" for v in p["accel_input_g"]),
-            ]
-            for p in summary["positions"]
-        ],
-    )
-    for sensor, block in (("gyro", summary), ("accel", summary["accel"])):
-        rep.heading(
-            f"{sensor}: rank {block['rank']}, condition number {block['condition_number']:.4g}"
-        )
-        for msg in block["identifiability_messages"]:
-            rep.paragraph(msg)
-        rep.table(PARAMETER_HEADER, parameter_rows(block))
-        rep.paragraph(
-            f"{sensor}: first-order sensitivity of each estimate to the positioning error at "
-            "one position (the others exact), in the parameter's unit per arcsec, about "
-            + sensitivity_axes_text(s["positioning_model"])
-            + "; max abs = largest magnitude, at = where it occurs."
-        )
-        rep.table(*sensitivity_table(block["positioning_sensitivity"], s["positioning_model"]))
-        rep.figure(
-            deviation_figure(results[sensor], f"{summary['method']}: {sensor} estimate - truth"),
-            f"{sensor}_deviation",
-            "Estimate minus truth per run; dashed: +-1 predicted sigma.",
-        )
-        rep.figure(
-            std_figure({summary["method"]: results}, sensor, f"{sensor}: std vs CRLB"),
-            f"{sensor}_std",
-            "Monte Carlo std beside the CRLB and the CRLB combined with the positioning error.",
-        )
-    rep.results = summary
-    return rep

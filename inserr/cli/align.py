@@ -54,7 +54,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from inserr.alignment.filter import static_floors
     from inserr.alignment.inputs import alignment_inputs
-    from inserr.alignment.study import SHOWN, build_report, run_schemes, weakest_directions
+    from inserr.alignment.report import build_report
+    from inserr.alignment.study import SHOWN, run_schemes, weakest_directions
     from inserr.core.units import ARCMIN, ARCSEC
 
     inp = alignment_inputs(scenario_from_args(args, "alignment"))
@@ -99,23 +100,15 @@ def run(args: argparse.Namespace) -> int:
     }
     payload = {**common, **runs[names[0]]} if len(names) == 1 else {**common, "runs": runs}
     if args.out:
-        ps = settings.position_sigma
-        position = "none" if ps is None else f"{ps:g} m"
-        context = [
-            f"Site: latitude {math.degrees(base.site.lat):.4g} deg, height {base.site.height:g} m. "
-            f"Base: {base.motion.describe()}.",
-            f"Alignment {duration / 60:g} min; table {math.degrees(base.rate):g} deg/s, "
-            f"stops {base.stop:g} s.",
-            f"Zero-velocity updates {settings.zupt_rate:g} Hz, 1σ {settings.zupt_sigma:g} m/s; "
-            f"position updates: {position}; "
-            f"vertical channel {settings.vertical}.",
-            f"Static floors for this budget with this attitude prior: φE "
-            f"{floor['phi_e_arcsec']:.3g} arcsec, φN {floor['phi_n_arcsec']:.3g} arcsec, heading "
-            f"{floor['phi_u_arcmin']:.3g} arcmin (1/σ² = 1/σ_prior² + 1/floor²; with a diffuse "
-            f"prior ∇/g = {floor_diffuse['phi_e_arcsec']:.3g} arcsec and ε_E/(Ω cos L) = "
-            f"{floor_diffuse['phi_u_arcmin']:.3g} arcmin).",
-        ]
-        build_report("Alignment study", results, context, payload).write(args.out)
+        build_report(
+            results,
+            payload,
+            base=base,
+            duration=duration,
+            settings=settings,
+            floor=floor,
+            floor_diffuse=floor_diffuse,
+        ).write(args.out)
     keys = [_key(s) for s in SHOWN]
     header = (
         ["state"]

@@ -183,10 +183,10 @@ def run(args: argparse.Namespace) -> int:
         return _design(args, inp)
     config = inp.config
 
+    from inserr.calibration.report import build_report
     from inserr.calibration.summary import (
         PARAMETER_HEADER,
         SENSITIVITY_HEADER,
-        build_report,
         calibration_summary,
         parameter_rows,
         sensitivity_axes_text,

@@ -16,7 +16,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.drift.study import build_report, compared_schemes, metrics_table, run_scheme
+    from inserr.drift.report import build_report
+    from inserr.drift.study import compared_schemes, metrics_table, run_scheme
 
     scen = scenario_from_args(args)
     names = compared_schemes(scen)

@@ -15,7 +15,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.drift.study import build_report, run_scheme
+    from inserr.drift.report import build_report
+    from inserr.drift.study import run_scheme
 
     scen = scenario_from_args(args)
     r = run_scheme(scen)

@@ -21,11 +21,8 @@ outside 0.8-1.2 times the bound.
 from __future__ import annotations
 
 import argparse
-import math
-from pathlib import Path
 
 from inserr.cli.common import add_json_flag, emit, format_table
-from inserr.core.units import MIL
 from inserr.scenario.flags import add_flags, scenario_from_args
 
 HELP = "Rotation-modulation north finder (1 gyro, 1 accel)."
@@ -109,7 +106,11 @@ def run(args: argparse.Namespace) -> int:
         "seed": inp.seed,
     }
     if args.out is not None:
-        summary["report"] = str(_write_report(args.out, result, summary, inp))
+        from inserr.northfinder.report import build_report
+
+        summary["report"] = str(
+            build_report(result, summary, inp.pose, inp.instrument).write(args.out)
+        )
     emit(args, summary, _human(summary))
     return 0
 
@@ -145,50 +146,3 @@ def _human(s: dict) -> str:
     if s.get("report"):
         lines.append(f"report: {s['report']}")
     return "\n".join(lines)
-
-
-def _write_report(out: str, result, summary: dict, inp) -> Path:
-    from inserr.northfinder.figures import (
-        convergence_figure,
-        heading_history_figure,
-        latitude_history_figure,
-    )
-    from inserr.output.report import Report
-
-    rep = Report("North finder: Monte Carlo against the Cramér-Rao bound")
-    rep.paragraph(
-        f"Site latitude {math.degrees(inp.pose.lat):g} deg, heading "
-        f"{math.degrees(inp.pose.heading):g} deg, pitch {math.degrees(inp.pose.pitch):g} deg, "
-        f"roll {math.degrees(inp.pose.roll):g} deg; table "
-        f"{math.degrees(inp.instrument.table_rate):g} deg/s; {summary['runs']} runs of "
-        f"{summary['duration_s']:g} s, seed {summary['seed']}. Latitude "
-        + (
-            "given to the estimator."
-            if summary["latitude_known"]
-            else "not given to the estimator; hemisphere declared: "
-            f"{summary['hemisphere_declared']}."
-        )
-    )
-    for warning in summary["warnings"]:
-        rep.paragraph(f"**Warning** — {warning}.")
-    rep.table(
-        ["quantity", "value"],
-        [
-            [k, "n/a" if v is None else v]
-            for k, v in summary.items()
-            if k not in ("report", "warnings")
-        ],
-    )
-    rep.figure(heading_history_figure(result), "heading_error", "Heading error vs time")
-    rep.figure(convergence_figure(result), "convergence", "Runs within 0.5 mil vs time")
-    if not result.latitude_known:
-        rep.figure(latitude_history_figure(result), "latitude_error", "Latitude error vs time")
-    rep.results.update(summary)
-    rep.results["history"] = {
-        "time_s": result.times,
-        "heading_sigma_mil": result.heading_sigma() / MIL,
-        "heading_bias_mil": result.heading_bias() / MIL,
-        "crlb_heading_mil": result.bound.heading / MIL,
-        "fraction_within_0p5_mil": result.fraction_within(),
-    }
-    return rep.write(out)

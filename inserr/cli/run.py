@@ -16,7 +16,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from inserr.drift.study import build_report, metrics_table, run_scheme
+    from inserr.drift.report import build_report
+    from inserr.drift.study import metrics_table, run_scheme
     from inserr.output.report import check_report_dir
     from inserr.scenario.schema import load_scenario
 

@@ -36,6 +36,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from inserr.reference.report import build_report
     from inserr.reference.strapdown import require_pyins
     from inserr.reference.validation import validate_scenario
 
@@ -43,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     require_pyins()
     v = validate_scenario(scen)
     if args.out:
-        v.report().write(args.out)
+        build_report(v).write(args.out)
     s = v.summary()
     rows = [
         [k, v_]

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -35,7 +36,11 @@ from inserr.model.error_sources import (
     source_set,
 )
 from inserr.model.exact_propagation import Output, propagate_covariance, propagate_outputs
-from inserr.model.fast_propagation import constant_error_response, white_noise_covariance
+from inserr.model.fast_propagation import (
+    constant_error_response,
+    gauss_markov_covariance,
+    white_noise_covariance,
+)
 from inserr.model.psi_model import DR, ErrorModel, Layout, attitude_error
 from inserr.model.timeline import Timeline
 
@@ -92,12 +97,12 @@ class DriftResult:
         )
         return np.sqrt(np.maximum(tot, 0.0))
 
-    @property
+    @cached_property
     def rms_horizontal(self) -> np.ndarray:
         """RMS horizontal error of the constant errors taken as random constants, m."""
         return rms_norm(self.source_horizontal)
 
-    @property
+    @cached_property
     def worst_horizontal(self) -> np.ndarray:
         """Horizontal error of the worst sign combination at each coarse time, m."""
         return worst_case_norm(self.source_horizontal)[0]
@@ -179,7 +184,6 @@ def analyze_drift(
         over smooth windows, white noise in closed form). ``"exact"``: the step-by-step
         engine :mod:`inserr.model.exact_propagation` on a timeline (a schedule is cut
         into ``substep`` sub-steps of constant rate first); kept as the reference.
-        Gauss-Markov bias instability always uses the step-by-step covariance.
     substep : float, s
         Sub-step of continuous motion when a timeline must be built from a schedule.
 
@@ -239,6 +243,17 @@ def analyze_drift(
         if engine == "fast" and not nmodel.layout.bias_instability:
             # White noise is isotropic: its covariance does not depend on the attitude.
             noise_cov[name] = white_noise_covariance(nmodel, arw, vrw, t_cov)
+            continue
+        if engine == "fast":
+            # A Gauss-Markov bias is seen through the attitude history.
+            hist = TimelineHistory(history) if isinstance(history, Timeline) else history
+            sensor, sigma, tau = (
+                ("gyro", gbi, imu.gyro_correlation_time)
+                if gbi > 0
+                else ("accel", abi, imu.accel_correlation_time)
+            )
+            nav_model = ErrorModel(site, Layout(bias=False), vertical=vertical)
+            noise_cov[name] = gauss_markov_covariance(nav_model, hist, sigma, tau, sensor, t_cov)
             continue
         ndisc = discretizer_for(nmodel, nmodel.noise_intensity(arw, vrw, gbi, abi))
         p0 = np.zeros((nmodel.layout.n,) * 2)

@@ -1,7 +1,7 @@
-"""Rotation-modulation north finder (P3): figures shared by the CLI report and the analysis.
+"""Rotation-modulation north finder (P3): figures shared by the report and the analysis.
 
-Figures are built on :class:`matplotlib.figure.Figure` directly, so no GUI backend
-is ever needed.
+Figures are built on :class:`matplotlib.figure.Figure` directly, in the inserr
+figure style (:mod:`inserr.output.figure_style`), so no GUI backend is ever needed.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ from matplotlib.figure import Figure
 
 from inserr.core.units import DEG, MIL
 from inserr.northfinder.study import CONVERGENCE_FRACTION, CONVERGENCE_TOLERANCE, MonteCarloResult
+from inserr.output import figure_style as style
 
 
 def heading_history_figure(result: MonteCarloResult, title: str = "") -> Figure:
@@ -30,21 +31,34 @@ def heading_history_figure(result: MonteCarloResult, title: str = "") -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    fig = Figure(figsize=(7.5, 4.2))
+    fig = style.new_figure(style.WIDTH, 4.2)
     ax = fig.add_subplot()
     t = result.times / 60.0
-    ax.semilogy(t, result.heading_sigma() / MIL, label="Monte Carlo 1σ")
-    ax.semilogy(t, np.abs(result.heading_bias()) / MIL, ":", label="Monte Carlo |bias|")
-    ax.semilogy(t, result.bound.heading / MIL, "k--", label="CRLB (white noise)")
-    ax.semilogy(t, result.bound_bi.heading / MIL, "k:", lw=0.8, label="CRLB + bias instability")
-    ax.axhline(CONVERGENCE_TOLERANCE / MIL, color="r", lw=0.8, label="0.5 mil")
+    ref = style.ROLE_COLORS["reference"]
+    ax.semilogy(
+        t, result.heading_sigma() / MIL, color=style.series_color(0), label="Monte Carlo 1σ"
+    )
+    ax.semilogy(
+        t,
+        np.abs(result.heading_bias()) / MIL,
+        ":",
+        color=style.series_color(1),
+        label="Monte Carlo |bias|",
+    )
+    ax.semilogy(t, result.bound.heading / MIL, "--", color=ref, label="CRLB (white noise)")
+    ax.semilogy(
+        t, result.bound_bi.heading / MIL, ":", color=ref, lw=0.8, label="CRLB + bias instability"
+    )
+    ax.axhline(
+        CONVERGENCE_TOLERANCE / MIL, color=style.ROLE_COLORS["threshold"], lw=0.8, label="0.5 mil"
+    )
     ax.set_xlabel("time [min]")
     ax.set_ylabel("heading error [mil]")
     ax.set_ylim(1e-2, 1e2)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    style.grid(ax, which="both")
+    ax.legend()
     ax.set_title(title or f"Heading error, {result.n_runs} runs")
-    return fig
+    return style.finish(fig)
 
 
 def convergence_figure(result: MonteCarloResult) -> Figure:
@@ -61,19 +75,19 @@ def convergence_figure(result: MonteCarloResult) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    fig = Figure(figsize=(7.5, 3.2))
+    fig = style.new_figure(style.WIDTH, 3.2)
     ax = fig.add_subplot()
-    ax.plot(result.times / 60.0, result.fraction_within())
-    ax.axhline(CONVERGENCE_FRACTION, color="r", lw=0.8, label="68 %")
+    ax.plot(result.times / 60.0, result.fraction_within(), color=style.series_color(0))
+    ax.axhline(CONVERGENCE_FRACTION, color=style.ROLE_COLORS["threshold"], lw=0.8, label="68 %")
     tc = result.convergence_time()
     if tc is not None:
-        ax.axvline(tc / 60.0, color="g", lw=0.8, label=f"converged at {tc:.0f} s")
+        ax.axvline(tc / 60.0, color=style.series_color(2), lw=0.8, label=f"converged at {tc:.0f} s")
     ax.set_xlabel("time [min]")
     ax.set_ylabel("fraction within 0.5 mil")
     ax.set_ylim(0, 1.02)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    return fig
+    style.grid(ax)
+    ax.legend()
+    return style.finish(fig)
 
 
 def latitude_history_figure(result: MonteCarloResult) -> Figure:
@@ -91,15 +105,21 @@ def latitude_history_figure(result: MonteCarloResult) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    fig = Figure(figsize=(7.5, 3.6))
+    fig = style.new_figure(style.WIDTH, 3.6)
     ax = fig.add_subplot()
     t = result.times / 60.0
-    ax.semilogy(t, result.lat_sigma() / DEG, label="Monte Carlo 1σ")
-    ax.semilogy(t, np.abs(result.lat_bias()) / DEG, ":", label="Monte Carlo |bias|")
-    ax.semilogy(t, result.bound.lat / DEG, "k--", label="CRLB")
+    ax.semilogy(t, result.lat_sigma() / DEG, color=style.series_color(0), label="Monte Carlo 1σ")
+    ax.semilogy(
+        t,
+        np.abs(result.lat_bias()) / DEG,
+        ":",
+        color=style.series_color(1),
+        label="Monte Carlo |bias|",
+    )
+    ax.semilogy(t, result.bound.lat / DEG, "--", color=style.ROLE_COLORS["reference"], label="CRLB")
     ax.set_xlabel("time [min]")
     ax.set_ylabel("latitude error [deg]")
     ax.set_ylim(1e-3, 1e2)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    return fig
+    style.grid(ax, which="both")
+    ax.legend()
+    return style.finish(fig)

@@ -1,1 +1,36 @@
-"""output."""
+"""Output: how results leave inserr — the one report writer, the one figure style, progress.
+
+* ``report`` — :class:`~inserr.output.report.Report` and its writer (``report.md``,
+  ``report.html``, PNGs, ``results.json``; atomic, never over a user's directory);
+  strict JSON and atomic file writers.
+* ``figure_style`` — sizes, resolution, fonts, grid and a colour per scheme; figures on
+  :class:`matplotlib.figure.Figure`, never pyplot.
+* ``progress`` — progress bars on a terminal, silent otherwise.
+"""
+
+from inserr.core.lazy import lazy_exports
+
+__getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "Report": "inserr.output.report",
+        "check_output_dir": "inserr.output.report",
+        "check_report_dir": "inserr.output.report",
+        "dumps": "inserr.output.report",
+        "write_bytes_atomic": "inserr.output.report",
+        "write_text_atomic": "inserr.output.report",
+        "progress": "inserr.output.progress",
+        "set_quiet": "inserr.output.progress",
+    },
+)
+
+__all__ = [
+    "Report",
+    "check_output_dir",
+    "check_report_dir",
+    "dumps",
+    "write_bytes_atomic",
+    "write_text_atomic",
+    "progress",
+    "set_quiet",
+]

@@ -1,19 +1,41 @@
-"""Report directories: ``report.md``, ``report.html`` (figures embedded), PNGs, ``results.json``.
+"""The one report writer: ``report.md``, ``report.html`` (figures embedded), PNGs, ``results.json``.
 
-A :class:`Report` collects headings, paragraphs, tables and matplotlib figures, then
-:meth:`Report.write` renders everything into a temporary directory next to the
-target and renames it into place, so a failure never leaves a partial report
-directory behind and an existing report is replaced only by a complete one.
+Every study of inserr — drift and scheme comparison (:mod:`inserr.drift.report`),
+validation against the nonlinear reference (:mod:`inserr.reference.report`),
+alignment (:mod:`inserr.alignment.report`), calibration
+(:mod:`inserr.calibration.report`), the north finder
+(:mod:`inserr.northfinder.report`) — and every analysis write-up in ``analyses/``
+builds a :class:`Report` (headings, paragraphs, tables, Markdown text, figures and
+the ``results`` dict) and hands it to this module; nothing else writes a report.
+So every report has the same layout, heading style, figure style
+(:mod:`inserr.output.figure_style`) and output-directory safety:
+
+* :meth:`Report.write` renders everything into a temporary directory next to the
+  target and renames it into place (with the :data:`MARKER` file), so a failure
+  never leaves a partial report directory behind and an existing report is replaced
+  only by a complete one; :func:`check_report_dir` refuses, before any work, a
+  target that inserr did not write;
+* :meth:`Report.write_into` writes the same files one by one, each atomically,
+  into a directory that other scripts also write into (an analysis whose slow
+  nonlinear part writes beside it).
+
+Layout of a report directory::
+
+    report.md        (REPORT.md for the analyses' write-ups) title, blocks, figure links
+    report.html      the same, self-contained (PNG figures base64-embedded)
+    <name>.png       one file per figure, named by the study
+    results.json     the study's numbers (strict JSON, engineering units)
+    .inserr-report   marker: written by inserr, replaced as a whole (write only)
 """
 
 from __future__ import annotations
 
 import base64
 import html
-import io
 import json
 import math
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Callable
@@ -50,6 +72,134 @@ def dumps(obj: Any) -> str:
     return json.dumps(to_jsonable(obj), indent=2, allow_nan=False, ensure_ascii=False)
 
 
+_CODE = re.compile(r"`([^`]+)`")
+_LINK = re.compile(r"\[([^\]]+)\]\(([^)\s]+)\)")
+_BOLD = re.compile(r"\*\*(?=\S)(.+?)(?<=\S)\*\*")
+# One star on each side, not part of "**" and hugging the text: "a * b * c" stays as it is.
+_ITALIC = re.compile(r"(?<![*\w])\*(?=[^\s*])(.+?)(?<=[^\s*])\*(?![*\w])")
+_HEADING = re.compile(r"^(#{1,6})\s+(.*)$")
+_RULE_ROW = re.compile(r"^\|?\s*:?-+:?\s*(\|\s*:?-+:?\s*)*\|?\s*$")
+
+
+def inline_html(text: str) -> str:
+    """HTML of one line of report text: escaped, with inline Markdown rendered.
+
+    Handles ```code```, ``[text](url)``, ``**bold**`` and ``*italic*`` (the inline
+    syntax the reports use); everything else is escaped literally.
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    str
+    """
+    parts = _CODE.split(text)  # odd indices are code spans: escaped only
+    out = []
+    for i, part in enumerate(parts):
+        if i % 2:
+            out.append(f"<code>{html.escape(part)}</code>")
+            continue
+        s = html.escape(part, quote=False)
+        s = _LINK.sub(lambda m: f'<a href="{html.escape(m[2])}">{m[1]}</a>', s)
+        s = _BOLD.sub(r"<strong>\1</strong>", s)
+        s = _ITALIC.sub(r"<em>\1</em>", s)
+        out.append(s)
+    return "".join(out)
+
+
+def _cells(line: str) -> list[str]:
+    line = line.strip()
+    if line.startswith("|"):
+        line = line[1:]
+    if line.endswith("|"):
+        line = line[:-1]
+    return [c.strip() for c in line.split("|")]
+
+
+def _table_html(header: list[str], rows: list[list[str]]) -> str:
+    out = ["<table><tr>" + "".join(f"<th>{inline_html(h)}</th>" for h in header) + "</tr>"]
+    for r in rows:
+        out.append("<tr>" + "".join(f"<td>{inline_html(c)}</td>" for c in r) + "</tr>")
+    out.append("</table>")
+    return "\n".join(out)
+
+
+def markdown_to_html(text: str) -> str:
+    """HTML of the Markdown subset the reports write.
+
+    Blocks: ``#`` headings, pipe tables (header, ``|---|`` rule, rows), ``-`` or
+    ``*`` bullet lists, fenced code, and paragraphs (consecutive lines, separated
+    by blank lines); inline syntax as in :func:`inline_html`.
+
+    Parameters
+    ----------
+    text : str
+        Markdown.
+
+    Returns
+    -------
+    str
+        HTML fragment.
+    """
+    lines = text.split("\n")
+    out: list[str] = []
+    para: list[str] = []
+    items: list[str] = []
+
+    def flush() -> None:
+        if para:
+            out.append("<p>" + "\n".join(inline_html(x) for x in para) + "</p>")
+            para.clear()
+        if items:
+            out.append("<ul>" + "".join(f"<li>{inline_html(x)}</li>" for x in items) + "</ul>")
+            items.clear()
+
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        stripped = line.strip()
+        if stripped.startswith("```"):
+            flush()
+            j = i + 1
+            while j < len(lines) and not lines[j].strip().startswith("```"):
+                j += 1
+            out.append("<pre><code>" + html.escape("\n".join(lines[i + 1 : j])) + "</code></pre>")
+            i = j + 1
+            continue
+        if not stripped:
+            flush()
+        elif m := _HEADING.match(stripped):
+            flush()
+            level = len(m[1])
+            out.append(f"<h{level}>{inline_html(m[2])}</h{level}>")
+        elif stripped.startswith("|"):
+            flush()
+            j = i
+            while j < len(lines) and lines[j].strip().startswith("|"):
+                j += 1
+            block = lines[i:j]
+            if len(block) > 1 and _RULE_ROW.match(block[1].strip()):
+                del block[1]
+            out.append(_table_html(_cells(block[0]), [_cells(x) for x in block[1:]]))
+            i = j
+            continue
+        elif stripped[:2] in ("- ", "* "):
+            if para:
+                flush()
+            items.append(stripped[2:])
+        elif items and line[:1] in (" ", "\t"):
+            items[-1] += " " + stripped  # continuation of a list item
+        else:
+            if items:
+                flush()
+            para.append(stripped)
+        i += 1
+    flush()
+    return "\n".join(out)
+
+
 @dataclass
 class _Block:
     kind: str
@@ -58,12 +208,20 @@ class _Block:
 
 @dataclass
 class Report:
-    """An ordered collection of report blocks.
+    """A report: an ordered collection of blocks and the numbers behind them.
+
+    A study builds one (its ``build_report``), adding headings, paragraphs, tables,
+    Markdown text and figures and setting :attr:`results`; :meth:`write` (or
+    :meth:`write_into`) renders it, the same way for every study.
 
     Parameters
     ----------
     title : str
         Report title (first heading of both the Markdown and the HTML file).
+    blocks : list
+        The content, in order (filled by the methods below).
+    results : dict
+        Written as ``results.json`` (numpy values allowed, see :func:`dumps`).
     """
 
     title: str
@@ -88,14 +246,24 @@ class Report:
 
         self.blocks.append(_Block("table", (header, [[cell(v) for v in r] for r in rows])))
 
-    def figure(self, fig, name: str, caption: str = "") -> None:
-        """Add a matplotlib figure, saved as ``<name>.png`` and embedded in the HTML."""
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-        import matplotlib.pyplot as plt
+    def markdown_text(self, text: str) -> None:
+        """Add Markdown written by the caller, copied verbatim into the Markdown file.
 
-        plt.close(fig)
-        self.blocks.append(_Block("figure", (name, caption, buf.getvalue())))
+        For write-ups generated as Markdown (headings ``#``, pipe tables, ``-``
+        lists, paragraphs, inline ``**bold**``, ``*italic*``, ``code``); the HTML
+        page renders that subset (:func:`markdown_to_html`).
+        """
+        self.blocks.append(_Block("markdown", text.strip("\n")))
+
+    def figure(self, fig, name: str, caption: str = "") -> None:
+        """Add a matplotlib figure, saved as ``<name>.png`` and embedded in the HTML.
+
+        The figure is finished in the inserr style (:func:`.figure_style.finish`) and
+        rendered at once; the caller's figure is not needed afterwards.
+        """
+        from inserr.output.figure_style import finish, png_bytes
+
+        self.blocks.append(_Block("figure", (name, caption, png_bytes(finish(fig)))))
 
     # --- rendering ------------------------------------------------------------
     def markdown(self) -> str:
@@ -105,7 +273,7 @@ class Report:
             if b.kind == "heading":
                 text, level = b.payload
                 out += ["#" * level + " " + text, ""]
-            elif b.kind == "paragraph":
+            elif b.kind in ("paragraph", "markdown"):
                 out += [b.payload, ""]
             elif b.kind == "table":
                 header, rows = b.payload
@@ -136,14 +304,10 @@ class Report:
             if b.kind == "heading":
                 text, level = b.payload
                 out.append(f"<h{level}>{esc(text)}</h{level}>")
-            elif b.kind == "paragraph":
-                out.append(f"<p>{esc(b.payload)}</p>")
+            elif b.kind in ("paragraph", "markdown"):
+                out.append(markdown_to_html(b.payload))
             elif b.kind == "table":
-                header, rows = b.payload
-                out.append("<table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in header) + "</tr>")
-                for r in rows:
-                    out.append("<tr>" + "".join(f"<td>{esc(c)}</td>" for c in r) + "</tr>")
-                out.append("</table>")
+                out.append(_table_html(*b.payload))
             elif b.kind == "figure":
                 name, caption, png = b.payload
                 data = base64.b64encode(png).decode("ascii")
@@ -154,19 +318,43 @@ class Report:
         out.append("</body></html>")
         return "\n".join(out)
 
+    def files(self, markdown_name: str = "report.md") -> dict[str, bytes]:
+        """Every file of the report, by name: Markdown, HTML, one PNG per figure, results.
+
+        Parameters
+        ----------
+        markdown_name : str
+            Name of the Markdown file (``report.md``; the analyses use ``REPORT.md``).
+
+        Returns
+        -------
+        dict of str to bytes
+            In writing order; the marker file is not included.
+        """
+        out = {
+            markdown_name: self.markdown().encode("utf-8"),
+            "report.html": self.html().encode("utf-8"),
+        }
+        for b in self.blocks:
+            if b.kind == "figure":
+                name, _, png = b.payload
+                out[f"{name}.png"] = png
+        out["results.json"] = dumps(self.results).encode("utf-8")
+        return out
+
     def write_into(self, out_dir: str | os.PathLike, markdown_name: str = "report.md") -> Path:
         """Write the report's files into ``out_dir`` one by one, each atomically.
 
         Unlike :meth:`write`, other files already in the directory are left alone
-        (an analysis directory that several scripts write into).
+        (an analysis directory that several scripts write into); the same files as
+        :meth:`write` are written, without the marker (the directory is not
+        replaced as a whole).
         """
         target = Path(out_dir).resolve()
-        for b in self.blocks:
-            if b.kind == "figure":
-                name, _, png = b.payload
-                write_bytes_atomic(target / f"{name}.png", png)
-        write_text_atomic(target / "results.json", dumps(self.results))
-        write_text_atomic(target / markdown_name, self.markdown())
+        files = self.files(markdown_name)
+        # The Markdown last: it is the write-up's index, updated once all it links is there.
+        for name in sorted(files, key=lambda n: n == markdown_name):
+            write_bytes_atomic(target / name, files[name])
         return target
 
     def write(self, out_dir: str | os.PathLike, markdown_name: str = "report.md") -> Path:
@@ -183,13 +371,8 @@ class Report:
         tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.parent))
         try:
             tmp.chmod(0o755)  # mkdtemp makes it private; a report is meant to be shared
-            (tmp / markdown_name).write_text(self.markdown(), encoding="utf-8")
-            (tmp / "report.html").write_text(self.html(), encoding="utf-8")
-            for b in self.blocks:
-                if b.kind == "figure":
-                    name, _, png = b.payload
-                    (tmp / f"{name}.png").write_bytes(png)
-            (tmp / "results.json").write_text(dumps(self.results), encoding="utf-8")
+            for name, data in self.files(markdown_name).items():
+                (tmp / name).write_bytes(data)
             (tmp / MARKER).write_text("written by inserr; replaced as a whole on rewrite\n")
             replace_dir(tmp, target)
         except BaseException:

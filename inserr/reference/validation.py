@@ -266,52 +266,6 @@ class Validation:
         out["notes"] = list(self.notes)
         return out
 
-    def report(self):
-        """A :class:`~inserr.output.report.Report` with the overlay figures and the summary."""
-        from inserr.output.report import Report
-        from inserr.reference.figures import (
-            attitude_overlay,
-            horizontal_overlay,
-            monte_carlo_figure,
-        )
-
-        rep = Report(f"inserr validate: {self.scenario.name}, scheme {self.scheme}")
-        rep.paragraph(
-            f"Linear prediction (psi-angle model) against the nonlinear reference (python-ins "
-            f"strapdown navigation of ideal increments from inverse navigation, errors injected), "
-            f"IMU rate {self.rate:g} Hz, {self.scenario.duration / HOUR:g} h."
-        )
-        m = self.metrics
-        rows = [[k, v] for k, v in m.items() if v is not None]
-        rep.table(["metric", "value"], rows)
-        rep.figure(
-            horizontal_overlay(self.linear, self.nonlinear),
-            "horizontal_overlay",
-            "Horizontal position error: linear vs nonlinear",
-        )
-        rep.figure(
-            attitude_overlay(self.linear, self.nonlinear),
-            "attitude_overlay",
-            "Attitude errors: linear vs nonlinear",
-        )
-        if self.monte_carlo is not None:
-            mc = self.monte_carlo.summary()
-            rep.heading("Monte Carlo")
-            rep.table(["metric", "value"], [[k, str(v)] for k, v in mc.items() if k != "chi2"])
-            if "chi2" in mc:
-                rep.table(
-                    ["chi-square test", "value"], [[k, str(v)] for k, v in mc["chi2"].items()]
-                )
-            rep.figure(
-                monte_carlo_figure(self.monte_carlo),
-                "monte_carlo",
-                "Monte Carlo spread vs covariance",
-            )
-        for note in self.notes:
-            rep.paragraph(f"Note: {note}")
-        rep.results = self.summary()
-        return rep
-
 
 def _mc_specs(
     scen: Scenario, runs: int, seed: int, random_constants: bool, record_step: float

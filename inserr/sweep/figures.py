@@ -23,22 +23,20 @@ not write again, and only those.
 
 from __future__ import annotations
 
-import io
 import itertools
 import math
 from pathlib import Path
 from typing import Any
 
 import matplotlib
+import numpy as np
+from matplotlib.colors import LogNorm, Normalize
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.colors import LogNorm, Normalize  # noqa: E402
-
-from inserr.output.report import write_bytes_atomic  # noqa: E402
-from inserr.sweep.grid import Grid, Param  # noqa: E402
-from inserr.sweep.store import FIGURE_MARK, remove_stale_figures  # noqa: E402
+from inserr.output import figure_style as style
+from inserr.output.report import write_bytes_atomic
+from inserr.sweep.grid import Grid, Param
+from inserr.sweep.store import FIGURE_MARK, remove_stale_figures
 
 LINE_METRICS = (
     ("max_horizontal_error_nmi", "max, signs as given"),
@@ -97,16 +95,17 @@ def _positions(p: Param) -> tuple[np.ndarray, list[str] | None, str]:
     return np.arange(len(p.values), dtype=float), p.ticks(), p.label()
 
 
-def _lines(grid: Grid, header: list[str], rows: list[list[Any]]) -> plt.Figure:
+def _lines(grid: Grid, header: list[str], rows: list[list[Any]]) -> Figure:
     p = grid.params[0]
     x, ticks, label = _positions(p)
     order = np.argsort(x, kind="stable")
-    fig, ax = plt.subplots(figsize=(7, 4.2))
+    fig = style.new_figure(style.WIDTH, 4.2)
+    ax = fig.add_subplot()
     every = []
     for i, (metric, text) in enumerate(LINE_METRICS):
         y = metric_array(grid, header, rows, metric)
         every.append(y)
-        ax.plot(x[order], y[order], marker="o", lw=1.2, color=f"C{i}", label=text)
+        ax.plot(x[order], y[order], marker="o", lw=1.2, color=style.series_color(i), label=text)
     allv = np.concatenate(every)
     if isinstance(_norm(allv), LogNorm):
         ax.set_yscale("log")
@@ -115,20 +114,19 @@ def _lines(grid: Grid, header: list[str], rows: list[list[Any]]) -> plt.Figure:
     ax.set_xlabel(label)
     ax.set_ylabel("horizontal position error (nmi)")
     ax.set_title(f"Sweep of {p.name}: horizontal error over {_hours(grid)}")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    return fig
+    style.grid(ax)
+    ax.legend()
+    return style.finish(fig)
 
 
 def _heatmap(ax, z: np.ndarray, down: Param, across: Param, norm: Normalize) -> Any:
-    cmap = plt.get_cmap("viridis").with_extremes(bad="0.85")
+    cmap = matplotlib.colormaps["viridis"].with_extremes(bad="0.85")
     im = ax.imshow(np.ma.masked_invalid(z), norm=norm, cmap=cmap, origin="lower", aspect="auto")
     across_ticks = across.ticks()
-    ax.set_yticks(range(len(down.values)), down.ticks(), fontsize=7)
+    ax.set_yticks(range(len(down.values)), down.ticks())
     ax.set_xticks(
         range(len(across.values)),
         across_ticks,
-        fontsize=7,
         rotation=30 if max(map(len, across_ticks)) > 6 else 0,
     )
     ax.set_ylabel(down.label())
@@ -139,43 +137,45 @@ def _heatmap(ax, z: np.ndarray, down: Param, across: Param, norm: Normalize) -> 
             rgba = cmap(norm(v)) if math.isfinite(v) else (1, 1, 1, 1)
             dark = 0.299 * rgba[0] + 0.587 * rgba[1] + 0.114 * rgba[2] < 0.5
             ax.text(
-                j, i, text, ha="center", va="center", fontsize=7, color="white" if dark else "black"
+                j,
+                i,
+                text,
+                ha="center",
+                va="center",
+                fontsize=style.FONT["annotation"],
+                color="white" if dark else "black",
             )
     return im
 
 
-def _heatmaps(grid: Grid, header: list[str], rows: list[list[Any]]) -> plt.Figure:
+def _heatmaps(grid: Grid, header: list[str], rows: list[list[Any]]) -> Figure:
     down, across = grid.params
-    fig, axes = plt.subplots(
-        1, len(MAP_METRICS), figsize=(5.2 * len(MAP_METRICS), 4.2), squeeze=False
+    fig, axes = style.subplots(
+        1, len(MAP_METRICS), width=5.2 * len(MAP_METRICS), height=4.2, squeeze=False
     )
     for ax, (metric, text) in zip(axes[0], MAP_METRICS, strict=True):
         z = metric_array(grid, header, rows, metric)
         im = _heatmap(ax, z, down, across, _norm(z))
-        ax.set_title(text, fontsize=9)
+        ax.set_title(text)
         fig.colorbar(im, ax=ax, shrink=0.85)
-    fig.suptitle(f"Sweep over {_hours(grid)} (grey: failed or invalid point)")
-    fig.tight_layout()
-    return fig
+    style.suptitle(fig, f"Sweep over {_hours(grid)} (grey: failed or invalid point)")
+    return style.finish(fig)
 
 
-def _facets(
-    grid: Grid, header: list[str], rows: list[list[Any]], metric: str, text: str
-) -> plt.Figure:
+def _facets(grid: Grid, header: list[str], rows: list[list[Any]], metric: str, text: str) -> Figure:
     down, across, *rest = grid.params
     z = metric_array(grid, header, rows, metric)
     combos = list(itertools.product(*(range(len(p.values)) for p in rest)))
     shown = combos[:MAX_FACETS]
     ncols = min(4, len(shown))
     nrows = math.ceil(len(shown) / ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(3.6 * ncols, 3.1 * nrows), squeeze=False)
+    fig, axes = style.subplots(nrows, ncols, width=3.6 * ncols, height=3.1 * nrows, squeeze=False)
     norm = _norm(z)
     im = None
     for ax, combo in zip(axes.flat, shown, strict=False):
         im = _heatmap(ax, z[(slice(None), slice(None), *combo)], down, across, norm)
         ax.set_title(
-            ", ".join(f"{p.name}={p.value_texts()[i]}" for p, i in zip(rest, combo, strict=True)),
-            fontsize=8,
+            ", ".join(f"{p.name}={p.value_texts()[i]}" for p, i in zip(rest, combo, strict=True))
         )
     for ax in axes[:, 1:].flat:
         # one set of row labels per row of panels: repeated, they overlap the panel to the left
@@ -186,11 +186,10 @@ def _facets(
     more = (
         f" (first {len(shown)} of {len(combos)} combinations)" if len(shown) < len(combos) else ""
     )
-    fig.suptitle(f"{text} over {_hours(grid)}{more}")
-    fig.tight_layout()
+    style.suptitle(fig, f"{text} over {_hours(grid)}{more}")
     if im is not None:
         fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8)
-    return fig
+    return style.finish(fig)
 
 
 def _hours(grid: Grid) -> str:
@@ -205,7 +204,7 @@ def _swept_keys(grid: Grid) -> set[str]:
     return {k for p in grid.params for ch in p.changes for k in ch}
 
 
-def figures(grid: Grid, header: list[str], rows: list[list[Any]]) -> dict[str, plt.Figure]:
+def figures(grid: Grid, header: list[str], rows: list[list[Any]]) -> dict[str, Figure]:
     """Summary figures by file stem (see the module docstring for the choice).
 
     Parameters
@@ -218,7 +217,8 @@ def figures(grid: Grid, header: list[str], rows: list[list[Any]]) -> dict[str, p
     -------
     dict of str to matplotlib.figure.Figure
         ``{"sweep": ...}`` for one or two parameters, one ``sweep_<metric>`` per
-        metric of :data:`MAP_METRICS` for three or more. The caller closes them.
+        metric of :data:`MAP_METRICS` for three or more (not managed by pyplot:
+        nothing to close).
     """
     n = len(grid.params)
     if n == 1:
@@ -253,21 +253,12 @@ def write_figures(
         The figures written, ``OUT/<stem>.png`` (see :func:`figures`).
     """
     paths: list[Path] = []
-    figs: dict[str, plt.Figure] = {}
     try:
-        figs = figures(grid, header, rows)
-        for stem, fig in figs.items():
-            buf = io.BytesIO()
-            fig.savefig(
-                buf, format="png", dpi=110, bbox_inches="tight", metadata=dict([FIGURE_MARK])
-            )
-            plt.close(fig)
+        for stem, fig in figures(grid, header, rows).items():
             path = Path(out_dir) / f"{stem}.png"
-            write_bytes_atomic(path, buf.getvalue())
+            write_bytes_atomic(path, style.png_bytes(fig, metadata=dict([FIGURE_MARK])))
             paths.append(path)
     except BaseException:
-        for fig in figs.values():
-            plt.close(fig)
         remove_stale_figures(out_dir)
         raise
     remove_stale_figures(out_dir, keep=paths)

@@ -1,0 +1,105 @@
+"""P1-style figures of a calibration Monte Carlo, in the inserr figure style.
+
+Inputs are :class:`~inserr.calibration.estimation.SensorResult` (SI); parameters
+are drawn in ppm, arcsec, deg/h or micro-g (:func:`inserr.calibration.estimation.parameter_unit`).
+Every function returns a :class:`matplotlib.figure.Figure` built without pyplot
+(:mod:`inserr.output.figure_style`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from inserr.calibration.estimation import PARAMETER_NAMES, SensorResult, parameter_unit
+from inserr.output import figure_style as style
+
+
+def deviation_figure(result: SensorResult, title: str) -> Figure:
+    """P1-style figure: estimate minus truth for every run, one panel per parameter.
+
+    The dashed lines mark +-1 predicted sigma (CRLB and positioning error combined).
+
+    Parameters
+    ----------
+    result : SensorResult
+        Monte Carlo result of one triad (SI).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        4 x 3 panels, deviations in ppm, arcsec, deg/h or micro-g against the run number.
+    """
+    fig, axes = style.subplots(4, 3, width=style.WIDE, height=8.0, sharex=True)
+    dev = result.deviations
+    runs = np.arange(1, dev.shape[0] + 1)
+    ref = style.ROLE_COLORS["reference"]
+    for j, name in enumerate(PARAMETER_NAMES):
+        ax = axes.flat[j]
+        unit, f = parameter_unit(name, result.sensor)
+        if result.identifiability.identifiable[j]:
+            ax.plot(runs, dev[:, j] / f, ".", ms=3, color=style.series_color(0))
+            s = result.predicted_std[j] / f
+            ax.axhline(s, ls="--", lw=0.8, color=ref)
+            ax.axhline(-s, ls="--", lw=0.8, color=ref)
+            ax.axhline(0.0, lw=0.5, color="0.5")
+        else:
+            ax.text(
+                0.5,
+                0.5,
+                "not identifiable",
+                ha="center",
+                va="center",
+                transform=ax.transAxes,
+                fontsize=style.FONT["annotation"],
+            )
+        ax.set_title(f"{name} [{unit}]")
+    for ax in axes[-1]:
+        ax.set_xlabel("run")
+    style.suptitle(fig, title)
+    return style.finish(fig)
+
+
+def std_figure(results: dict[str, dict[str, SensorResult]], sensor: str, title: str) -> Figure:
+    """Bar chart per parameter: Monte Carlo std of each method beside its CRLB and prediction.
+
+    Values are relative to the predicted std of the first method, so the three units
+    (ppm, arcsec, deg/h) share one axis.
+
+    Parameters
+    ----------
+    results : dict
+        Label of each method -> ``{"gyro": SensorResult, "accel": SensorResult}``.
+    sensor : str
+        "gyro" or "accel".
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One group of bars per parameter (dimensionless ratios).
+    """
+    fig = style.new_figure(style.WIDE, 4.5)
+    ax = fig.subplots()
+    names = list(PARAMETER_NAMES)
+    x = np.arange(len(names))
+    first = next(iter(results.values()))[sensor]
+    ref = np.where(np.isfinite(first.predicted_std), first.predicted_std, np.nan)
+    width = 0.8 / max(1, len(results))
+    crlb, predicted = style.ROLE_COLORS["reference"], style.ROLE_COLORS["threshold"]
+    for k, (label, res) in enumerate(results.items()):
+        r = res[sensor]
+        off = (k - (len(results) - 1) / 2) * width
+        ax.bar(x + off, r.std / ref, width, color=style.series_color(k), label=f"{label}: MC std")
+        ax.plot(x + off, r.crlb_sigma / ref, "_", color=crlb, ms=12)
+        ax.plot(x + off, r.predicted_std / ref, "_", color=predicted, ms=12)
+    ax.plot([], [], "_", color=crlb, label="CRLB (noise only)")
+    ax.plot([], [], "_", color=predicted, label="CRLB + positioning error")
+    ax.set_xticks(x, names, rotation=45)
+    ax.set_ylabel(f"std / predicted std of {next(iter(results))}")
+    ax.set_title(title)
+    ax.legend()
+    return style.finish(fig)
