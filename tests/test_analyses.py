@@ -27,6 +27,7 @@ CASES = [
     ("p2_four_position/run.py", [], "# "),
     ("p0_swinging_base/run.py", ["--quick"], "## Verdicts"),
     ("p3_northfinder/run.py", ["--quick"], "# "),
+    ("design_p0/run.py", ["--quick"], "## Verdicts (issue 17)"),
 ]
 
 

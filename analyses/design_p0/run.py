@@ -69,6 +69,8 @@ def verdicts(o: DesignOutcome) -> list[str]:
         hbest = min(
             (c for c in cat if "held_out_worst_nmi" in c), key=lambda c: c["held_out_worst_nmi"]
         )
+        ok = [c for c in cat if "held_out_worst_nmi" in c and c["meets_constraints"]]
+        hok = min(ok, key=lambda c: c["held_out_worst_nmi"]) if ok else None
         held_beaten = [
             c["label"] for c in cat if c.get("held_out_worst_nmi", 1e9) <= ch["held_out_worst_nmi"]
         ]
@@ -76,18 +78,45 @@ def verdicts(o: DesignOutcome) -> list[str]:
             f"On the {len(ch['held_out_rms_nmi'])} held-out motions the designed schedule's "
             f"worst RMS is {ch['held_out_worst_nmi']:.4g} nmi (at "
             f"{ch['held_out_worst_motion']}); the best catalogue scheme's is "
-            f"{hbest['held_out_worst_nmi']:.4g} nmi ({hbest['label']}). "
+            f"{hbest['held_out_worst_nmi']:.4g} nmi ({hbest['label']})"
+            + (
+                f", of those that meet the constraints {hok['held_out_worst_nmi']:.4g} nmi "
+                f"({hok['label']}). "
+                if hok is not None and hok is not hbest
+                else ". "
+            )
             + (
                 "The design holds on motions it never saw."
                 if not held_beaten
                 else f"It does NOT hold there: {', '.join(held_beaten)} do as well or better."
             )
         )
-    out.append(
-        f"Run time of the design: {r['seconds']:.0f} s ({r['engine']}; "
-        f"{r['motion_evaluations_computed']} motion evaluations computed, "
-        f"{r['evaluations_in_cache_at_start']} taken from the cache)."
-    )
+    if "held_out_worst_nmi" in ch and o.out_dir is not None:
+        # An open-loop cycle repeats its turn times: a swing whose period divides the cycle
+        # (near enough) meets every turn at the same phase, and the error grows cycle after
+        # cycle. Say how close the held-out worst case is to such a period.
+        sch = load_scenario(o.out_dir / "chosen_scheme.toml").scheme()
+        worst = next(m for m in o.settings.held_out if m.label == ch["held_out_worst_motion"])
+        if sch.cycle_time is not None and worst.period is not None:
+            ratio = sch.cycle_time / worst.period
+            out.append(
+                f"The designed cycle lasts {sch.cycle_time:.1f} s; the held-out worst swing's "
+                f"period is {worst.period:.1f} s, {ratio:.3f} of which fit in a cycle "
+                f"(nearest whole number {round(ratio)}: a resonance of the open-loop cycle "
+                "that the 36 grid periods did not sample)."
+            )
+    if r["motion_evaluations_computed"] == 0:
+        out.append(
+            f"Every evaluation of this write-up came from the design's cache "
+            f"({r['evaluations_in_cache_at_start']} evaluations; the run that computed them "
+            "is `inserr design analyses/design_p0/scenario.toml`, timed in docs/design.md)."
+        )
+    else:
+        out.append(
+            f"Run time of the design: {r['seconds']:.0f} s ({r['engine']}; "
+            f"{r['motion_evaluations_computed']} motion evaluations computed, "
+            f"{r['evaluations_in_cache_at_start']} taken from the cache)."
+        )
     return out
 
 
