@@ -129,8 +129,8 @@ def verdicts(o: DesignOutcome) -> list[str]:
     if r["motion_evaluations_computed"] == 0:
         out.append(
             f"Every evaluation of this write-up came from the design's cache "
-            f"({r['evaluations_in_cache_at_start']} evaluations, computed by an earlier run of the same "
-            "design; run times in docs/design.md)."
+            f"({r['evaluations_in_cache_at_start']} evaluations, computed by an earlier run "
+            "of the same design; run times in docs/design.md)."
         )
     else:
         out.append(
