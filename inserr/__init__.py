@@ -83,6 +83,9 @@ _EXPORTS = {
     "run_scheme": "inserr.drift.study",
     "validate": "inserr.reference.validation",
     "run_alignment": "inserr.alignment.filter",
+    # The notebook front door (``inserr.drift`` and ``inserr.sweep`` are the callable
+    # subpackages themselves; see inserr.core.lazy.callable_package).
+    "compare": "inserr.drift.api",
 }
 
 __all__ = ["__version__", *_EXPORTS]

@@ -49,3 +49,16 @@ def format_table(header: list[str], rows: list[list[Any]], fmt: str = "{:.4g}") 
     lines.append("  ".join("-" * w for w in widths))
     lines += ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in body]
     return "\n".join(lines)
+
+
+def warn_empty_budget(args: argparse.Namespace, runs: list) -> None:
+    """Say on stderr (also under ``--json``) when the runs have no error source at all.
+
+    Every number is then zero; exit status stays 0 (it is a valid, if empty, question).
+    """
+    from inserr.drift.study import EMPTY_BUDGET
+
+    if runs and all(EMPTY_BUDGET in r.metrics()["warnings"] for r in runs):
+        fix = "e.g. --gyro-bias 0.01" if getattr(args, "scenario", None) is None else ""
+        text = EMPTY_BUDGET + (f" ({fix})" if fix else "")
+        sys.stderr.write(f"inserr {args.command}: warning: {text}\n")

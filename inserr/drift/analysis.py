@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -71,6 +72,10 @@ class DriftResult:
         ``accel_bias_instability``; only the non-zero ones).
     metrics : dict
         Headline numbers (see :func:`headline`).
+
+    The derived curves (:attr:`horizontal`, :attr:`rms_horizontal`,
+    :attr:`worst_horizontal`, :attr:`noise_horizontal_sigma`) are computed on first
+    use and kept: the metrics, the figures and the exports all read them.
     """
 
     t: np.ndarray
@@ -83,12 +88,12 @@ class DriftResult:
     noise_cov: dict[str, np.ndarray]
     metrics: dict = field(default_factory=dict)
 
-    @property
+    @cached_property
     def horizontal(self) -> np.ndarray:
         """Deterministic horizontal position error magnitude, m, on the fine grid."""
         return np.hypot(self.nav[:, 6], self.nav[:, 7])
 
-    @property
+    @cached_property
     def noise_horizontal_sigma(self) -> np.ndarray:
         """1-sigma radial (DRMS) horizontal error from all noise sources, m, coarse grid."""
         tot = sum(
@@ -96,12 +101,12 @@ class DriftResult:
         )
         return np.sqrt(np.maximum(tot, 0.0))
 
-    @property
+    @cached_property
     def rms_horizontal(self) -> np.ndarray:
         """RMS horizontal error of the constant errors taken as random constants, m."""
         return rms_norm(self.source_horizontal)
 
-    @property
+    @cached_property
     def worst_horizontal(self) -> np.ndarray:
         """Horizontal error of the worst sign combination at each coarse time, m."""
         return worst_case_norm(self.source_horizontal)[0]

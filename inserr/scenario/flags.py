@@ -145,6 +145,9 @@ FLAGS: dict[str, Flag] = {
     # [output]
     "step": _F("output.step", "s", "output step of the deterministic run"),
     "covariance-step": _F("output.covariance_step", "s", "output step of covariance results"),
+    "export-step": _F(
+        "output.export_step", "s", "row step of the exported time series (timeseries.csv)"
+    ),
     "substep": _F("output.substep", "s", "sub-step of continuous motion"),
     "vertical": _F("output.vertical", None, "vertical channel"),
     "engine": _F("output.engine", None, "drift engine: fast, or exact (step by step, reference)"),
@@ -272,7 +275,7 @@ IMU_FLAGS = (
 INITIAL = ("initial-attitude", "initial-velocity", "initial-position")
 MOTION = ("heading", "pitch", "roll", "turn-rate", "yaw-swing")
 SCHEME = ("scheme", "rate", "stop", "reversal", "delta", "variant")
-OUTPUT = ("step", "covariance-step", "substep", "vertical", "engine")
+OUTPUT = ("step", "covariance-step", "export-step", "substep", "vertical", "engine")
 #: The scenario flags of ``drift`` (and ``compare``, ``validate``, ``sweep``).
 DRIFT = ("duration", *SITE, *IMU_FLAGS, *INITIAL, *MOTION, *SCHEME, *OUTPUT)
 
