@@ -7,6 +7,7 @@
 * ``study`` — the filter per scheme on one base, and the tables.
 * ``figures`` — σ(t) and estimation-error figures.
 * ``report`` — the alignment report, for the one writer.
+* ``api`` — the notebook front door: ``align`` from a scenario, file or dict.
 """
 
 from inserr.core.lazy import lazy_exports
@@ -26,6 +27,8 @@ __getattr__, __dir__ = lazy_exports(
         "build_report": "inserr.alignment.report",
         "AlignmentInputs": "inserr.alignment.inputs",
         "alignment_inputs": "inserr.alignment.inputs",
+        "align": "inserr.alignment.api",
+        "AlignmentStudy": "inserr.alignment.api",
     },
 )
 
@@ -42,4 +45,6 @@ __all__ = [
     "build_report",
     "AlignmentInputs",
     "alignment_inputs",
+    "align",
+    "AlignmentStudy",
 ]

@@ -62,3 +62,14 @@ def warn_empty_budget(args: argparse.Namespace, runs: list) -> None:
         fix = "e.g. --gyro-bias 0.01" if getattr(args, "scenario", None) is None else ""
         text = EMPTY_BUDGET + (f" ({fix})" if fix else "")
         sys.stderr.write(f"inserr {args.command}: warning: {text}\n")
+
+
+def by_column(header: list[str], rows: list[list[Any]]) -> tuple[list[str], list[list[Any]]]:
+    """The table turned: one row per column of ``rows``, one column per row.
+
+    For comparisons on a terminal: the schemes become the columns and the long,
+    unit-bearing metric names the rows, so the table stays narrow.
+    """
+    out_header = [header[0], *(str(r[0]) for r in rows)]
+    out_rows = [[name, *(r[i] for r in rows)] for i, name in enumerate(header) if i > 0]
+    return out_header, out_rows

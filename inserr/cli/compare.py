@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from inserr.cli.common import add_json_flag, emit, format_table, warn_empty_budget
+from inserr.cli.common import add_json_flag, by_column, emit, format_table, warn_empty_budget
 from inserr.output.progress import progress
 from inserr.scenario.flags import DRIFT, add_flags, scenario_from_args
 
@@ -26,7 +26,7 @@ def run(args: argparse.Namespace) -> int:
         build_report(
             scen, runs, f"inserr scheme comparison: {scen.name}", getattr(args, "scenario", None)
         ).write(args.out)
-    header, rows = metrics_table(runs)
+    header, rows = by_column(*metrics_table(runs))
     warn_empty_budget(args, runs)
     emit(
         args,

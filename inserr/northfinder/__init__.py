@@ -8,6 +8,7 @@
   (:func:`~inserr.northfinder.study.monte_carlo`).
 * ``figures`` — heading, convergence and latitude figures.
 * ``report`` — the north-finder report, for the one writer.
+* ``api`` — the notebook front door: ``northfind`` from a scenario, file or dict.
 """
 
 from inserr.core.lazy import lazy_exports
@@ -28,6 +29,8 @@ __getattr__, __dir__ = lazy_exports(
         "build_report": "inserr.northfinder.report",
         "NorthfinderInputs": "inserr.northfinder.inputs",
         "northfinder_inputs": "inserr.northfinder.inputs",
+        "northfind": "inserr.northfinder.api",
+        "NorthfinderStudy": "inserr.northfinder.api",
     },
 )
 
@@ -45,4 +48,6 @@ __all__ = [
     "build_report",
     "NorthfinderInputs",
     "northfinder_inputs",
+    "northfind",
+    "NorthfinderStudy",
 ]
