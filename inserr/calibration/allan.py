@@ -196,9 +196,9 @@ def read_recording(
     The file (``#`` comment lines allowed) has seven columns: time or sample index,
     gyro x, y, z, accelerometer x, y, z. An optional header line names them, with
     units in brackets: ``time (s), gyro x (deg/s), ..., accel z (m/s^2)``. A first
-    column named ``sample``, ``index``, ``n``, ``i`` or ``k`` is a sample index
-    (consecutive integers); otherwise it is the time, which must advance by
-    ``1 / rate`` (within 1 %).
+    column named ``sample``, ``index``, ``n``, ``i`` or ``k`` (or, without a header,
+    holding consecutive integers) is a sample index; otherwise it is the time, which
+    must advance by ``1 / rate`` (within 1 %).
 
     Parameters
     ----------
@@ -280,7 +280,10 @@ def read_recording(
     label = (header[0][0] if header else "").lower()
     first_col = data[:, 0]
     steps = np.diff(first_col)
-    if label in ("sample", "index", "n", "i", "k", "sample index"):
+    # Without a header, a column of consecutive integers is a sample index (at 1 Hz
+    # the two readings agree anyway).
+    unnamed_index = header is None and bool(np.all(steps == 1.0)) and first_col[0] % 1 == 0
+    if label in ("sample", "index", "n", "i", "k", "sample index") or unnamed_index:
         if not np.all(steps == 1.0):
             k = int(np.flatnonzero(steps != 1.0)[0])
             raise InputError(
