@@ -167,7 +167,7 @@ METRIC_COLUMNS = (
     "max horizontal error, worst signs (nmi)",
     "final noise 1-sigma horizontal error (nmi)",
     "final heading error (arcmin)",
-    "motor starts per hour",
+    "motor starts (per hour)",
 )
 
 

@@ -320,7 +320,8 @@ class Report:
             f"<title>{esc(self.title)}</title>",
             # Wide enough for an 11 in figure at its own 110 dpi (1210 px): figures show
             # at 100 % on a usual screen, so their 7-10 pt text stays legible.
-            "<style>body{font-family:sans-serif;max-width:1240px;margin:auto;padding:1em}"
+            "<style>body{font-family:sans-serif;max-width:1300px;margin:auto;padding:1em}"
+            "figure{margin:1em 0}"
             "table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px;"
             "text-align:right}th{background:#eee}td:first-child{text-align:left}"
             "img{max-width:100%;height:auto}figcaption{font-style:italic;margin:0.3em 0 1em}"
