@@ -261,31 +261,39 @@ def test_free_vertical_channel_agrees_over_a_short_run():
 def test_exact_engine_converges_to_the_fast_one_as_its_substep_shrinks(scheme):
     dur = 1800.0
     hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, dur), SWING, dur)
-    fast = analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0).nav
-    errs = []
-    navs = []
-    for h in (1.0, 0.5):
-        ex = analyze_drift(
-            SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0, engine="exact", substep=h
-        ).nav
-        navs.append(ex)
-        errs.append(_relative(ex, fast))
-    # Second order: halving h divides the error by 4 (3 to 5 allowed: the error is not
-    # exactly h^2 where stops end between sub-step nodes).
-    assert 3.0 < errs[0] / errs[1] < 5.0
-    richardson = navs[1] + (navs[1] - navs[0]) / 3.0
-    assert _relative(richardson, fast) < errs[1] / 20.0
+    fast = analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0)
+    n = len(fast.t_cov)
+
+    def views(r):  # signed response (fine grid) and per-source responses (coarse grid)
+        return r.nav, r.source_horizontal.reshape(n, -1)
+
+    runs = [
+        views(analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0, engine="exact",
+                            substep=h))
+        for h in (1.0, 0.5)
+    ]  # fmt: skip
+    for which, ref in enumerate(views(fast)):
+        errs = [_relative(r[which], ref) for r in runs]
+        # Second order: halving h divides the error by 4 (3 to 5 allowed: the error is
+        # not exactly h^2 where stops end between sub-step nodes).
+        assert 3.0 < errs[0] / errs[1] < 5.0
+        richardson = runs[1][which] + (runs[1][which] - runs[0][which]) / 3.0
+        assert _relative(richardson, ref) < errs[1] / 20.0
 
 
-@pytest.mark.parametrize("dt_out", [1.0, 7.0])
-def test_phase_cache_equals_direct_sampling(dt_out):
+@pytest.mark.parametrize(
+    ("scheme", "dt_out"),
+    [("nulling-two-position", 1.0), ("nulling-two-position", 7.0), ("four-position", 1.0),
+     ("flexible-two-position", 1.0)],
+)  # fmt: skip
+def test_phase_cache_equals_direct_sampling(scheme, dt_out):
     # Stops on a periodic vehicle reuse the vehicle part per phase; forbidding that
     # (no phase step) must change nothing but round-off. A 7 s output step does not
     # divide the 20 s phase step: fine times then fall anywhere in the cached windows.
+    # Four-position and the flexible rule stop at table angles whose matrices are not
+    # symmetric (a transposed table would show), nulling at 0 and 180 deg.
     dur = 3600.0
-    hist = ScheduleHistory(
-        build_scheme("nulling-two-position", 6 * DEG, 300.0).plan(SWING, dur), SWING, dur
-    )
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, dur), SWING, dur)
     model = ErrorModel(SITE, Layout(scale_misalignment=True))
     from inserr.model.error_sources import constant_sources, source_set
 
@@ -431,3 +439,41 @@ def test_gauss_markov_stationary_limit_equals_white_noise():
     white = fp.white_noise_covariance(ErrorModel(SITE, Layout(bias=False)), arw, 0.0, t)
     # Relative difference O(tau / T) for the variance growth: 2 s against hours.
     assert np.allclose(got[-1], white[-1], rtol=2e-3, atol=1e-3 * np.abs(white[-1]).max())
+
+
+@pytest.mark.parametrize(
+    ("motion", "scheme"),
+    [(Motion(heading=0.3, pitch=0.02, roll=-0.03), "sixteen-position"),
+     (Motion(), "continuous"),
+     (SWING, "two-position"),
+     (SWING, "none")],
+)  # fmt: skip
+def test_periodic_lifting_equals_the_whole_run(monkeypatch, motion, scheme):
+    # A periodic history (open-loop table on a static or periodic vehicle) is computed
+    # for one period and copied: identical to computing every window of the run.
+    dur = 6 * 3600.0
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 120.0).plan(motion, dur), motion, dur)
+    assert hist.period() is not None
+    lifted = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    monkeypatch.setattr(fp, "_lifting", lambda *a: None)
+    whole = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    assert _relative(lifted.nav, whole.nav) < 1e-10
+    n = len(whole.t_cov)
+    assert (
+        _relative(lifted.source_horizontal.reshape(n, -1), whole.source_horizontal.reshape(n, -1))
+        < 1e-10
+    )
+
+
+def test_history_period_is_the_common_period_of_table_and_vehicle():
+    # Two-position, 300 s stops at 6 deg/s: cycle 4 (300 + 30) = 1320 s; a 120 s swing
+    # divides it (11 swings); a 90 s swing does not: 1320 and 90 meet at 3960 s.
+    table = build_scheme("two-position", 6 * DEG, 300.0).plan(SWING, 72 * 3600.0)
+    assert ScheduleHistory(table, SWING, 72 * 3600.0).period() == (0.0, 1320.0)
+    swing90 = YawSwing(amplitude=6 * DEG, period=90.0)
+    t90 = build_scheme("two-position", 6 * DEG, 300.0).plan(swing90, 72 * 3600.0)
+    t0, p = ScheduleHistory(t90, swing90, 72 * 3600.0).period()
+    assert t0 == 0.0 and math.isclose(p, 3960.0, rel_tol=1e-12)
+    # A closed-loop rule has no period.
+    flex = build_scheme("flexible-two-position", 6 * DEG, 300.0).plan(SWING, 7200.0)
+    assert ScheduleHistory(flex, SWING, 7200.0).period() is None

@@ -551,22 +551,38 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     pieces = history.pieces()
     fastest = float(np.max(np.abs(lam)))
     step = phase_step(pieces, t_coarse, _grid_step(t_fine), fastest)
-    win = make_windows(pieces, t_coarse, fastest, step)
+    lift = _lifting(history, t_fine, t_coarse)
+    if lift is None:
+        win = make_windows(pieces, t_coarse, fastest, step)
+        base_coarse = t_coarse
+    else:
+        # A periodic history: windows of [0, t0 + P] only; the rest are copies.
+        t0, period = lift
+        end = t0 + period
+        base_coarse = t_coarse[t_coarse <= end + MERGE]
+        win = make_windows(_restrict(pieces, end), base_coarse, fastest, step)
     a_sig = signed_coefficients(modes, sources)
-    run = _Run(modes, history, pieces, win, t_coarse, a_sig, step, sources)
+    run = _Run(modes, history, pieces, win, base_coarse, a_sig, step, sources)
     run.still_windows()
     run.rotation_windows()
     run.cached_windows()
     run.direct_windows()
+    inputs = run.inputs
+    if lift is not None:
+        run.full, run.src, inputs = _tile(win, run.inputs, t0, period, t_coarse)
+    full = run.full if run.full is not None else win
     z0 = modes.to_modes(sources.signed()[4])
-    run.z_end = scan(lam, 0.0, z0, win.b, run.incr)
+    run.z_end = scan(lam, 0.0, z0, full.b, run.incr[run.src] if run.src is not None else run.incr)
     run.z_start = np.concatenate([z0[None], run.z_end[:-1]])
 
     # Fine outputs in blocks (a 720 h run at 1 s has 2.6 million of them).
     fine = np.empty((len(t_fine), 9))
     h = _grid_step(t_fine)
-    for lo in range(0, len(t_fine), CHUNK_FINE):
-        tb = t_fine[lo : lo + CHUNK_FINE]
+    stop = len(t_fine)
+    if lift is not None:
+        stop = _lifted_fine(run, modes, lift, t_fine, h, fine)  # all outputs after t0
+    for lo in range(0, stop, CHUNK_FINE):
+        tb = t_fine[lo : min(lo + CHUNK_FINE, stop)]
         zb = np.empty((len(tb), modes.n_modes), dtype=complex)
         at_zero = tb <= MERGE
         zb[at_zero] = z0
@@ -580,14 +596,133 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     coarse_z = np.empty((len(t_coarse), modes.n_modes, sources.n), dtype=complex)
     coarse_z[0] = z_src0
     if len(t_coarse) > 1:
-        inputs = run.inputs[1:]
-        coarse_z[1:] = scan(lam, float(t_coarse[0]), z_src0, t_coarse[1:], inputs)
+        coarse_z[1:] = scan(lam, float(t_coarse[0]), z_src0, t_coarse[1:], inputs[1:])
     coarse = modes.to_nav(coarse_z * sources.value[None, None, :], axis=1)
     counts = {
         name: int(np.count_nonzero(win.kind == k))
-        for name, k in (("still", STILL), ("cached", CACHED), ("direct", DIRECT))
+        for name, k in (
+            ("still", STILL),
+            ("rotation", ROTATION),
+            ("cached", CACHED),
+            ("direct", DIRECT),
+        )
     }
+    counts["periods"] = 0 if lift is None else int(round((t_coarse[-1] - lift[0]) / lift[1]))
     return ConstantErrorResponse(t_fine, fine, t_coarse, coarse, counts, run.nodes)
+
+
+def _lifted_fine(run, modes: NavModes, lift, t: np.ndarray, h: float, out: np.ndarray) -> int:
+    """Fine outputs of a periodic run: ``z(t0 + k P + s) = e^{lambda s} Z_k + p(s)``.
+
+    ``Z_k`` is the state at the start of period k (from the window scan) and ``p`` the
+    response of one period from a zero state (the same for every period, by
+    periodicity), so the outputs of all periods are one small real matrix product per
+    navigation state. Fills ``out[j0:]`` (from ``t0`` on) and returns ``j0``; the
+    outputs before ``t0`` are left to the caller.
+    """
+    t0, period = lift
+    j0 = int(round(t0 / h))
+    n_s = int(round(period / h))
+    lam = modes.lam
+    full = run.full
+    n_per = int(np.ceil((len(t) - 1 - j0) / n_s))
+    # State at the start of each period: the scan's value at the window ending there.
+    starts = t0 + np.arange(n_per) * period
+    k_end = np.searchsorted(full.b, starts - MERGE, side="left")
+    z_k = np.where((starts > MERGE)[:, None], run.z_end[np.minimum(k_end, len(full.b) - 1)],
+                   run.z_start[0][None, :])  # fmt: skip
+    s = np.arange(1, n_s + 1) * h
+    e = np.exp(lam[None, :] * s[:, None])  # (n_s, R)
+    # One period from a zero state: the first period's states less its homogeneous part.
+    p = run.fine_states(t0 + s, h) - e * z_k[0][None, :]
+    vw = modes.out * modes.weight[None, :]  # (9, R): x = Re(V c z)
+    # Re(V c (e Z_k + p)) for every period k and offset s: a real product per state.
+    a = np.concatenate([z_k.real, -z_k.imag], axis=1)  # (n_per, 2R)
+    b = np.concatenate(
+        [(e[:, None, :] * vw[None]).real, (e[:, None, :] * vw[None]).imag], axis=2
+    )  # (n_s, 9, 2R)
+    hom = (a @ b.reshape(-1, 2 * len(lam)).T).reshape(n_per, n_s, 9)
+    part = (p @ vw.T).real  # (n_s, 9)
+    vals = (hom + part[None]).reshape(-1, 9)
+    n = len(t) - 1 - j0
+    out[j0 + 1 :] = vals[:n]
+    return j0 + 1
+
+
+def _lifting(history, t_fine: np.ndarray, t_coarse: np.ndarray) -> tuple[float, float] | None:
+    """``(t0, P)`` if the history repeats with period P after t0, on both output grids.
+
+    Lifting needs at least two whole periods, and every output time and window
+    boundary of one period to recur in the next: both grids uniform from 0, and
+    ``t0``, ``P`` and the end multiples of their steps.
+    """
+    period = getattr(history, "period", None)
+    found = period() if period is not None else None
+    if found is None:
+        return None
+    t0, p = found
+    end = float(t_coarse[-1])
+    hc, hf = _grid_step(t_coarse), _grid_step(t_fine)
+    if hc is None or hf is None or end - t0 < 2 * p:
+        return None
+    for h in (hc, hf):
+        if not all(_is_multiple(x, h) or x == 0.0 for x in (t0, p, end)):
+            return None
+    return t0, p
+
+
+def _restrict(pieces: Pieces, end: float) -> Pieces:
+    """The pieces of ``[0, end]`` (the last one cut at ``end``)."""
+    n = int(np.searchsorted(pieces.breaks, end - MERGE, side="right"))
+    breaks = np.concatenate([pieces.breaks[:n], [end]])
+
+    def cut(a):
+        return None if a is None else a[:n]
+
+    return Pieces(
+        breaks,
+        pieces.bandwidth[:n],
+        pieces.still[:n],
+        cut(pieces.table),
+        pieces.vehicle_period,
+        cut(pieces.constant),
+        cut(pieces.phase_class),
+    )
+
+
+def _tile(win: Windows, inputs: np.ndarray, t0: float, period: float, t_coarse: np.ndarray):
+    """Windows of the whole run from those of ``[0, t0 + P]``, and the per-source inputs.
+
+    Returns the full :class:`Windows`, the index of each full window's base window, and
+    the inputs of every coarse interval (copied from the base period's).
+    """
+    end = float(t_coarse[-1])
+    first = np.flatnonzero(win.a >= t0 - MERGE)  # the periodic part of the base windows
+    head = np.arange(first[0]) if len(first) else np.arange(len(win.a))
+    reps = int(np.floor((end - t0) / period + 1e-9))
+    pieces_src = [head]
+    shifts = [np.zeros(len(head))]
+    for k in range(reps):
+        pieces_src.append(first)
+        shifts.append(np.full(len(first), k * period))
+    rest = end - t0 - reps * period
+    if rest > MERGE:
+        tail = first[win.b[first] - t0 <= rest + MERGE]
+        pieces_src.append(tail)
+        shifts.append(np.full(len(tail), reps * period))
+    src = np.concatenate(pieces_src)
+    shift = np.concatenate(shifts)
+    jp = int(round(period / (t_coarse[1] - t_coarse[0])))
+    coarse = win.coarse[src] + np.rint(shift / period).astype(int) * jp
+    full = Windows(
+        win.a[src] + shift, win.b[src] + shift, win.piece[src], win.n[src], win.kind[src],
+        win.phase[src], coarse,
+    )  # fmt: skip
+    # Coarse interval j of period k is interval j - k jp of the base period.
+    j = np.arange(len(t_coarse))
+    j0 = int(round(t0 / (t_coarse[1] - t_coarse[0])))
+    base_j = np.where(j <= j0, j, j0 + (j - j0 - 1) % jp + 1)
+    return full, src, inputs[base_j]
 
 
 class _Run:
@@ -606,8 +741,8 @@ class _Run:
         self.sources = sources
         self.inputs = np.zeros((len(t_coarse), r, sources.n), dtype=complex)
         self.u_still = np.zeros((nw, r), dtype=complex)  # constant input of still windows
-        self.direct_u: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        self.cached_fine = None
+        self.full: Windows | None = None  # the whole run's windows when lifted
+        self.src: np.ndarray | None = None  # their base windows
         self.nodes = 0
 
     def _add_features(self, j: np.ndarray, y: np.ndarray) -> None:
@@ -761,13 +896,14 @@ class _Run:
         y_phase = np.einsum("qr,cpqf->cprf", wend, fv)  # (C, m, R, 63)
         self.cached_template = (n, s, fv)
 
-        # Tables: class 0 windows see their piece's table; the others the identity.
-        tables = np.where(
-            (cls == 0)[:, None, None], self.pieces.table[win.piece[idx]], np.eye(3)[None]
-        )
-        keys = np.round(tables.reshape(len(idx), 9), 12)
-        uniq, inv = np.unique(keys, axis=0, return_inverse=True)
-        inv = inv.reshape(-1)
+        # Tables: class 0 windows see their piece's table; the others the identity. Equal
+        # tables are found among the pieces (hundreds), not the windows (thousands).
+        pieces, piece_of = np.unique(win.piece[idx], return_inverse=True)
+        pcls = self.pieces.phase_class[pieces]
+        tables = np.where((pcls == 0)[:, None, None], self.pieces.table[pieces], np.eye(3)[None])
+        keys = np.round(tables.reshape(len(pieces), 9), 12)
+        uniq, inv_p = np.unique(keys, axis=0, return_inverse=True)
+        inv = inv_p.reshape(-1)[piece_of.reshape(-1)]
         mats = uniq.reshape(-1, 3, 3)
         nt = len(mats)
         # Signed input as a linear form in the template features, per table: A_M.
@@ -838,8 +974,10 @@ class _Run:
             b_w = win.b[sel][nd.window]
             wt = nd.weight[:, None] * np.exp(lam[None, :] * (b_w - nd.t)[:, None])
             self.incr[sel] = np.add.reduceat(wt * u, nd.first, axis=0)
-            cj = win.coarse[sel][nd.window]
-            jj, sums = _accumulate(cj, wt * self._to_coarse(b_w, cj), feats)
+            # Feature integrals per window (one product per window), then per coarse interval.
+            y = _window_sums(nd, win.n[sel], wt, feats)  # (Wc, R, 63) to each window's end
+            to_c = self._to_coarse(win.b[sel], win.coarse[sel])  # (Wc, R)
+            jj, sums = _group_sum(win.coarse[sel], y * to_c[:, :, None])
             self._add_features(jj, sums)
             self.direct_t[base : base + len(nd.t)] = nd.t
             self.direct_u[base : base + len(nd.t)] = u
@@ -847,20 +985,21 @@ class _Run:
 
     # --- fine output times --------------------------------------------------------------
     def fine_states(self, t: np.ndarray, dt_fine: float | None) -> np.ndarray:
-        win = self.win
-        w = np.searchsorted(win.b, t - MERGE, side="left").clip(0, len(win.b) - 1)
-        dt = t - win.a[w]
+        """Signed modal states at times ``t`` (s, > 0, increasing), (len(t), R)."""
+        full = self.full if self.full is not None else self.win
+        wf = np.searchsorted(full.b, t - MERGE, side="left").clip(0, len(full.b) - 1)
+        w = self.src[wf] if self.src is not None else wf  # the base window holding the data
+        dt = t - full.a[wf]
         table = _OffsetTable(self.lam, dt, dt_fine)
         out = np.empty((len(t), len(self.lam)), dtype=complex)
-        kind = win.kind[w]
+        kind = self.win.kind[w]
+        zs = self.z_start[wf]
         s = np.flatnonzero(kind == STILL)
         if len(s):
-            out[s] = table.exp(s) * self.z_start[w[s]] + table.phi(s) * self.u_still[w[s]]
+            out[s] = table.exp(s) * zs[s] + table.phi(s) * self.u_still[w[s]]
         rr = np.flatnonzero(kind == ROTATION)
         if len(rr):
-            out[rr] = table.exp(rr) * (
-                self.z_start[w[rr]] + self._rotation_integrals(w[rr], dt[rr], dt_fine)
-            )
+            out[rr] = table.exp(rr) * (zs[rr] + self._rotation_integrals(w[rr], dt[rr], dt_fine))
         c = np.flatnonzero(kind == CACHED)
         if len(c):
             if fine_aligned(self.step, dt_fine):
@@ -868,10 +1007,10 @@ class _Run:
                 ints = self._cached_integrals(w[c], pos, dt_fine)
             else:
                 ints = self._cached_integrals_anywhere(w[c], dt[c])
-            out[c] = table.exp(c) * (self.z_start[w[c]] + ints)
+            out[c] = table.exp(c) * (zs[c] + ints)
         d = np.flatnonzero(kind == DIRECT)
         if len(d):
-            out[d] = table.exp(d) * (self.z_start[w[d]] + self._direct_integrals(w[d], dt[d]))
+            out[d] = table.exp(d) * (zs[d] + self._direct_integrals(w[d], dt[d], wf[d]))
         return out
 
     def _cached_integrals(self, w: np.ndarray, pos: np.ndarray, dt_fine: float) -> np.ndarray:
@@ -919,17 +1058,20 @@ class _Run:
             acc += ints[:, k, None] * coef[k][inv]
         return 0.5 * step * acc
 
-    def _direct_integrals(self, w: np.ndarray, dt: np.ndarray) -> np.ndarray:
+    def _direct_integrals(self, w: np.ndarray, dt: np.ndarray, wf: np.ndarray) -> np.ndarray:
         """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine times of direct windows.
 
         The Chebyshev series of ``g(s) = e^{-lambda (s - a)} u(s)`` on each window,
         integrated term by term to the output times. Windows of the same shape (points,
         length, fine offsets: every turn of an open-loop table on a still vehicle) share
-        one integration matrix, applied to all of them in one product.
+        one integration matrix, applied to all of them in one product. ``w`` are the
+        (base) windows holding the data, ``wf`` the windows of the run (they differ in a
+        lifted periodic run, where one base window serves every period).
         """
         win, lam = self.win, self.lam
         out = np.zeros((len(w), len(lam)), dtype=complex)
-        wins, first_pt, counts = np.unique(w, return_index=True, return_counts=True)
+        wins_f, first_pt, counts = np.unique(wf, return_index=True, return_counts=True)
+        wins = w[first_pt]
         length = win.b[wins] - win.a[wins]
         key = np.stack(
             [win.n[wins], np.rint(length * 1e6), np.rint(dt[first_pt] * 1e6), counts], axis=1
@@ -952,8 +1094,7 @@ class _Run:
         # Windows of a shape of their own (irregular stop times): point by point.
         single = np.isin(shape_of, np.flatnonzero(shape_count == 1))
         if np.any(single):
-            sel_w = wins[single]
-            pts = np.flatnonzero(np.isin(w, sel_w))
+            pts = np.flatnonzero(np.isin(wf, wins_f[single]))
             n_w = win.n[w[pts]]
             for m in np.unique(n_w):
                 sub = pts[n_w == m]
@@ -1042,23 +1183,20 @@ def _group_sum(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.nda
     return k[start], np.add.reduceat(v, start, axis=0)
 
 
-def _accumulate(cj: np.ndarray, wt: np.ndarray, feats: np.ndarray):
-    """Per coarse interval j: ``sum over its nodes of wt[node, r] * feats[node, f]``.
+def _window_sums(nd: _Nodes, n: np.ndarray, wt: np.ndarray, feats: np.ndarray) -> np.ndarray:
+    """Per window: ``sum over its nodes of wt[node, r] * feats[node, f]``, (W, R, 63).
 
-    Returns the distinct intervals and their sums (K, R, 63).
+    Windows of equal point count are one batched product each (complex weights as two
+    real products).
     """
-    # Nodes are in time order, so each coarse interval is one contiguous run.
-    start = np.flatnonzero(np.concatenate([[True], cj[1:] != cj[:-1]]))
-    count = np.diff(np.concatenate([start, [len(cj)]]))
-    width = int(count.max())
-    pos = np.arange(len(cj)) - np.repeat(start, count)
-    run = np.repeat(np.arange(len(start)), count)
-    wpad = np.zeros((len(start), width, wt.shape[1]), dtype=complex)
-    fpad = np.zeros((len(start), width, feats.shape[1]))
-    wpad[run, pos] = wt
-    fpad[run, pos] = feats
-    wt_t = np.swapaxes(wpad, 1, 2)
-    return cj[start], np.matmul(wt_t.real, fpad) + 1j * np.matmul(wt_t.imag, fpad)
+    out = np.empty((len(n), wt.shape[1], feats.shape[1]), dtype=complex)
+    for m in np.unique(n):
+        ws = np.flatnonzero(n == m)
+        idx = nd.first[ws][:, None] + np.arange(m)[None, :]  # (Wm, m)
+        w_t = np.swapaxes(wt[idx], 1, 2)  # (Wm, R, m)
+        f = feats[idx]  # (Wm, m, 63)
+        out[ws] = np.matmul(w_t.real, f) + 1j * np.matmul(w_t.imag, f)
+    return out
 
 
 # ---------------------------------------------------------------------------------------

@@ -219,6 +219,33 @@ class ScheduleHistory:
             phase_class,
         )
 
+    def period(self) -> tuple[float, float] | None:
+        """``(t0, P)``: the attitude history repeats with period P after t0, or None.
+
+        An open-loop table repeats its cycle; the vehicle repeats its own period (a
+        static base any). P is the least common multiple of the two (when they are
+        commensurate to 1e-9 and P leaves at least two periods in the run), and the
+        schedule's segments after t0 are checked to recur after P (same kinds, gimbals,
+        durations, rates, and angles modulo a full turn).
+        """
+        cycle = self.table.cycle
+        vehicle = self.motion.repeat_period()
+        if not self.motion.is_static and vehicle is None:
+            return None
+        if not cycle:
+            # No table cycle: one stop held for the whole run (the "none" scheme) repeats
+            # with the vehicle, or with any period on a static base (an hour).
+            if len(self.table) != 1 or self.table.kind[0] != "stop":
+                return None
+            return 0.0, (vehicle if vehicle is not None else 3600.0)
+        period = float(cycle) if vehicle is None else _common_period(float(cycle), vehicle)
+        if period is None or 2 * period > self._duration:
+            return None
+        for t0 in np.unique(np.concatenate([[0.0], self.table.t0[1:2]])):
+            if _recurs(self.table, float(t0), period, self._duration):
+                return float(t0), period
+        return None
+
     def timeline(self, substep: float = 1.0) -> Timeline:
         """The same history as a :class:`~inserr.model.timeline.Timeline` (:func:`build_timeline`).
 
@@ -291,3 +318,39 @@ def _rot_z(angle: np.ndarray) -> np.ndarray:
     out[..., 1, 1] = c
     out[..., 2, 2] = 1.0
     return out
+
+
+def _common_period(a: float, b: float, most: int = 1000) -> float | None:
+    """Least common multiple of two periods commensurate to 1e-9 (``p a = q b``), or None."""
+    for p in range(1, most + 1):
+        q = round(p * a / b)
+        if q >= 1 and abs(p * a - q * b) <= 1e-9 * p * a:
+            return p * a
+    return None
+
+
+def _recurs(table: TableSchedule, t0: float, period: float, duration: float) -> bool:
+    """Whether every segment starting in ``[t0, duration - period]`` recurs one period later."""
+    k = np.flatnonzero((table.t0 >= t0 - 1e-9) & (table.t0 < duration - period - 1e-9))
+    if not len(k):
+        return False
+    later = np.searchsorted(table.t0, table.t0[k] + period - 1e-6)
+    if np.any(later >= len(table)):
+        return False
+    two_pi = 2.0 * np.pi
+
+    def same_angle(x, y):
+        return np.all(np.abs(np.remainder(x - y + np.pi, two_pi) - np.pi) < 1e-9)
+
+    kind = np.array(table.kind)
+    gimbal = np.array(table.gimbal)
+    return bool(
+        np.all(np.abs(table.t0[later] - table.t0[k] - period) < 1e-6)
+        and np.all(kind[later] == kind[k])
+        and np.all(gimbal[later] == gimbal[k])
+        and np.allclose(table.duration[later], table.duration[k], rtol=0, atol=1e-9)
+        and np.allclose(table.rate[later], table.rate[k], rtol=0, atol=1e-15)
+        and same_angle(table.a0[later], table.a0[k])
+        and same_angle(table.b0[later], table.b0[k])
+        and not np.any(kind[k] == "isolate")
+    )
