@@ -345,3 +345,27 @@ def test_readme_examples_print_what_the_readme_says(tmp_path, monkeypatch):
             checked += 1
     assert checked >= 5  # the main job, the Python example, the shell one, cycle, modes
     assert Path("scenario_report/report.html").is_file()
+
+
+def test_alignment_budget_splits_the_filters_covariance_exactly():
+    # One covariance per source through the filter's own transitions and gains adds
+    # up to the filter's covariance (filterpy's Joseph form), to round-off.
+    from inserr.alignment.filter import STATES, UNITS
+
+    study = inserr.align(
+        {
+            "scenario": {"duration": "3 min"},
+            "imu": {"arw": "0.001 deg/sqrt(h)", "vrw": "10 ug/sqrt(Hz)"},
+        },
+        ["none", "two-position"],
+    )
+    budget = study.budget()
+    for name, result in study.results.items():
+        total = budget[name].loc["total (root-sum-square)"].to_numpy()
+        idx = [STATES.index(s) for s in ("phi_e", "phi_n", "phi_u")]
+        scale = np.array([UNITS[s][1] for s in ("phi_e", "phi_n", "phi_u")])
+        assert total == pytest.approx(result.final_sigma[idx] / scale, rel=1e-9)
+    # Static and unindexed, the tilt is limited by the accelerometer bias (nabla / g).
+    none = budget["none"]
+    tilt = none.columns[0]
+    assert none[tilt].drop("total (root-sum-square)").idxmax() == "accelerometer bias (prior)"
