@@ -28,6 +28,7 @@ __all__ = [
     "Grid",
     "build_grid",
     "SweepStore",
-    "run_sweepsweep",
+    "run_sweep",
+    "sweep",
     "SweepResult",
 ]
