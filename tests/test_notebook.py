@@ -369,3 +369,15 @@ def test_alignment_budget_splits_the_filters_covariance_exactly():
     none = budget["none"]
     tilt = none.columns[0]
     assert none[tilt].drop("total (root-sum-square)").idxmax() == "accelerometer bias (prior)"
+
+
+def test_the_notebook_walk_through_touches_no_module_path():
+    # The page is executed by tests/test_docs.py; here: it uses the front door only
+    # (import inserr; inserr.<verb>), never a module path such as inserr.drift.study.
+    page = (ROOT / "docs" / "tutorials" / "notebook.md").read_text(encoding="utf-8")
+    code = "\n".join(b for lang, b in _FENCE.findall(page) if lang == "python")
+    assert "import inserr" in code
+    assert not re.search(r"from inserr\b|import inserr\.", code)
+    assert not re.search(r"inserr\.[a-z_]+\.[a-z_]+", code)
+    for verb in ("load_scenario", "drift", "compare", "to_dataframe", "budget", "plot"):
+        assert verb in code, verb
