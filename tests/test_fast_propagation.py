@@ -446,7 +446,8 @@ def test_gauss_markov_stationary_limit_equals_white_noise():
     [(Motion(heading=0.3, pitch=0.02, roll=-0.03), "sixteen-position"),
      (Motion(), "continuous"),
      (SWING, "two-position"),
-     (SWING, "none")],
+     (SWING, "none"),
+     (Motion(), "four-position")],
 )  # fmt: skip
 def test_periodic_lifting_equals_the_whole_run(monkeypatch, motion, scheme):
     # A periodic history (open-loop table on a static or periodic vehicle) is computed
@@ -454,6 +455,12 @@ def test_periodic_lifting_equals_the_whole_run(monkeypatch, motion, scheme):
     dur = 6 * 3600.0
     hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 120.0).plan(motion, dur), motion, dur)
     assert hist.period() is not None
+    # The lifting period is a whole number of the history's periods that both output
+    # grids divide (four-position: a 570 s cycle lifts with 1140 s on the 60 s grid).
+    lift = fp._lifting(hist, output_grid(dur, 1.0), output_grid(dur, 60.0))
+    assert lift is not None
+    ratio = lift[1] / hist.period()[1]
+    assert abs(ratio - round(ratio)) < 1e-9 and abs(lift[1] / 60.0 - round(lift[1] / 60.0)) < 1e-9
     lifted = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
     monkeypatch.setattr(fp, "_lifting", lambda *a: None)
     whole = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
