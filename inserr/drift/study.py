@@ -286,8 +286,10 @@ def timeseries_csv(runs: list[SchemeRun], step: float | None = None) -> str:
     for run in runs:
         cols = timeseries_columns(run, step)
         numeric = np.column_stack([cols[c] for c in SERIES_COLUMNS[1:]])
-        name = run.name
-        lines += [name + "," + ",".join(f"{v:.10g}" for v in row) for row in numeric]
+        # One %-format per row of Python floats: a third of the time of a per-value
+        # f-string over numpy scalars (the quick-start CSV has 18,000 rows).
+        row_fmt = run.name.replace("%", "%%") + "," + ",".join(["%.10g"] * numeric.shape[1])
+        lines += [row_fmt % tuple(row) for row in numeric.tolist()]
     return "\n".join(lines) + "\n"
 
 
