@@ -381,3 +381,97 @@ def test_the_notebook_walk_through_touches_no_module_path():
     assert not re.search(r"inserr\.[a-z_]+\.[a-z_]+", code)
     for verb in ("load_scenario", "drift", "compare", "to_dataframe", "budget", "plot"):
         assert verb in code, verb
+
+
+# --- the other studies' front doors --------------------------------------------------------
+def _check_common_interface(study, value_unit: str):
+    """The five calls every result answers (the walk-through's promise)."""
+    from matplotlib.figure import Figure
+
+    metrics = study.metrics()
+    assert isinstance(metrics, dict) and metrics
+    json.dumps(metrics, default=str)  # plain data
+    frame = study.to_dataframe()
+    assert len(frame) > 0
+    budget = study.budget()
+    # The root-sum-square total: a row (sources of one quantity) or, for the
+    # calibration's per-parameter budget, a column (the sources of each parameter).
+    totals = [str(x) for x in (*budget.index, *budget.columns) if str(x).startswith("total")]
+    assert totals
+    assert any(value_unit in c for c in budget.columns)
+    assert isinstance(study.plot(), Figure)
+    assert "<table>" in study._repr_html_()
+    return frame, budget
+
+
+def test_calibrate_front_door_budget_is_the_closed_form_noise_limit():
+    from inserr.core.earth import OMEGA_IE
+    from inserr.output.results import TOTAL_LABEL
+
+    study = inserr.calibrate({"scenario": {"runs": 20}})
+    frame, budget = _check_common_interface(study, "1-sigma")
+    # Every parameter by its readable name, the per-run table one error column each.
+    label = "gyro scale factor, x axis (sf_x)"
+    assert label in budget.index and f"{label} error (ppm)" in frame.columns
+    assert "accelerometer misalignment, y axis sensing z (mis_yz)" in budget.index
+    assert len(frame) == 20
+    # P1's four positions give sf_x from two stops on the north Earth rate:
+    # sigma = ARW / (sqrt(T) sqrt(2) W cos L) (docs/tutorials/calibration.md, section 2).
+    scen = study.scenario
+    arw, lat = scen.value("imu.arw"), scen.value("site.latitude")
+    dwell = study.summary["positions"][1]["dwell_s"]  # T: every stop's own dwell
+    closed = arw / (math.sqrt(dwell) * math.sqrt(2) * OMEGA_IE * math.cos(lat)) / 1e-6
+    # The CRLB is the least-squares covariance of the same noise model, so the two
+    # agree to round-off (1e-9 leaves room for the matrix inverse).
+    assert budget.loc[label, "sensor noise 1-sigma (CRLB)"] == pytest.approx(closed, rel=1e-9)
+    # Independent sources: the total is their root-sum-square.
+    row = budget.loc[label]
+    assert row[TOTAL_LABEL] == pytest.approx(
+        math.hypot(row["sensor noise 1-sigma (CRLB)"], row["table positioning 1-sigma"])
+    )
+
+
+def test_northfind_front_door_without_bias_instability_is_the_white_noise_bound():
+    from scipy.stats import chi2
+
+    runs = 20
+    scen = {
+        "scenario": {"runs": runs, "duration": "3 min"},
+        "imu": {"gyro_bias_instability": "0 deg/h", "accel_bias_instability": "0 ug"},
+    }
+    study = inserr.northfind(scen)
+    frame, budget = _check_common_interface(study, "(mil)")
+    assert "heading error 1-sigma, Monte Carlo (mil)" in frame.columns
+    col = budget.columns[0]
+    # Limiting case: no bias instability, so its share is zero and the total is the
+    # white-noise Cramer-Rao bound itself.
+    assert budget[col].iloc[1] == 0.0
+    assert budget[col].iloc[2] == pytest.approx(budget[col].iloc[0], rel=1e-12)
+    # The Monte Carlo scatter of an efficient estimator: runs * (s/sigma)^2 follows
+    # chi-square with runs - 1 degrees of freedom; 99.9 % two-sided interval.
+    ratio = budget[col].iloc[3] / budget[col].iloc[2]
+    lo, hi = (math.sqrt(chi2.ppf(q, runs - 1) / runs) for q in (0.0005, 0.9995))
+    assert lo < ratio < hi
+
+
+def test_sweep_front_door_points_are_the_drift_of_each_scenario(tmp_path):
+    base = {
+        "scenario": {"duration": "6 h"},
+        "imu": {"gyro_bias": "0.01 deg/h", "accel_bias": "20 ug"},
+        "scheme": {"name": "two-position"},
+    }
+    stops = ["60 s", "300 s"]
+    study = inserr.sweep(base, {"scheme.stop": stops}, out=tmp_path / "sw", workers=1)
+    frame, budget = _check_common_interface(study, "(nmi)")
+    assert list(frame["scheme.stop"]) == stops and set(frame["status"]) == {"ok"}
+    largest = 0.0
+    for stop, final in zip(stops, frame["final_horizontal_error_nmi"], strict=True):
+        # The same point run directly (in this process, not by a sweep worker).
+        direct = inserr.drift({**base, "scheme": {"name": "two-position", "stop": stop}})
+        assert float(final) == pytest.approx(direct.metrics()["final_horizontal_error_nmi"])
+        largest = max(largest, max(direct.metrics()["error_budget"].values()))
+    # One row per dominating source (readable), then the count of points analysed.
+    assert budget.iloc[-1, 0] == len(stops)
+    assert budget.iloc[:-1, 0].sum() == len(stops)
+    assert budget.iloc[:-1, 1].max() == pytest.approx(largest)
+    assert all("_" not in name for name in budget.index)

@@ -222,6 +222,30 @@ def calibrate(scenario: Scenario | str | Path | dict | None = None) -> Calibrati
     return CalibrationStudy(scen, summ, results)
 
 
+def parameter_label(sensor: str, name: str) -> str:
+    """Readable name of a calibration parameter, its symbol in brackets.
+
+    Parameters
+    ----------
+    sensor : {"gyro", "accel"}
+    name : str
+        From :data:`inserr.calibration.estimation.PARAMETER_NAMES` (``sf_x``,
+        ``mis_xy``, ``bias_z``, ...).
+
+    Returns
+    -------
+    str
+        E.g. ``"gyro misalignment, x axis sensing y (mis_xy)"``: the drift budget's
+        name of the same error (:func:`inserr.drift.budget.source_label`; ``mis_ij``
+        is the sensitivity of the i sensor to the j input in both chapters).
+    """
+    from inserr.drift.budget import source_label
+
+    kind, _, axes = name.partition("_")
+    what = {"sf": "scale_factor", "mis": "misalignment", "bias": "bias"}[kind]
+    return f"{source_label(f'{sensor}_{what}_{axes}')} ({name})"
+
+
 #: Columns of the calibration budget (per parameter, in its unit).
 CALIBRATION_BUDGET = (
     "sensor noise 1-sigma (CRLB)",
@@ -261,7 +285,8 @@ class CalibrationStudy(StudyResult):
     def to_dataframe(self) -> pd.DataFrame:
         """The per-run table: estimate minus truth of every parameter in every run.
 
-        Columns ``run`` and ``<sensor> <parameter> error (<unit>)``.
+        Index ``run``; columns ``<parameter> error (<unit>)``, the parameter by its
+        readable name (:func:`parameter_label`).
         """
         import pandas as pd
 
@@ -272,7 +297,7 @@ class CalibrationStudy(StudyResult):
             dev = result.deviations
             for k, name in enumerate(PARAMETER_NAMES):
                 unit, factor = parameter_unit(name, sensor)
-                cols[f"{sensor} {name} error ({unit})"] = dev[:, k] / factor
+                cols[f"{parameter_label(sensor, name)} error ({unit})"] = dev[:, k] / factor
         frame = pd.DataFrame(cols)
         frame.index.name = "run"
         return frame
@@ -293,7 +318,7 @@ class CalibrationStudy(StudyResult):
                 vals = [np.nan if v is None else float(v) for v in (noise, pos)]
                 total = rss(v for v in vals if np.isfinite(v)) if any(np.isfinite(vals)) else np.nan
                 rows.append([p["unit"], *vals, total, p["std"]])
-                index.append(f"{sensor} {name}")
+                index.append(parameter_label(sensor, name))
         return pd.DataFrame(
             rows,
             index=pd.Index(index, name="parameter"),
