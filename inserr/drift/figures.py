@@ -41,11 +41,18 @@ def horizontal_error(results: dict, title: str = "Horizontal position error") ->
     n = len(results)
     cols = 1 if n <= 3 else 2
     rows = -(-n // cols)
-    fig, axes = style.subplots(
+    # Fixed margins (no layout engine: a third less drawing time); the bottom margin
+    # holds the x label and the legend, the top the title and the panel titles.
+    fig, axes = style.fixed_grid(
         rows,
         cols,
         width=style.WIDTH if cols == 1 else style.WIDE,
-        height=1.6 + style.ROW_HEIGHT * rows,
+        panel_height=style.ROW_HEIGHT,
+        left=0.75,
+        top=0.6,
+        bottom=0.95,
+        wspace=0.35,
+        hspace=0.45,
         sharex=True,
         sharey=True,
         squeeze=False,
@@ -77,7 +84,7 @@ def _role_legend(fig: Figure, noise: bool) -> None:
     ]
     if noise:
         handles.append(Patch(color="0.2", alpha=0.25, label="noise 1-sigma envelope"))
-    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
+    fig.legend(handles=handles, loc="lower center", ncols=len(handles), frameon=False)
 
 
 #: Legend texts of the statistical curves (the same in every figure).
