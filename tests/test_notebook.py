@@ -252,6 +252,33 @@ def test_report_carries_the_whole_scenario_data_files_and_provenance(tmp_path, c
         assert total == pytest.approx(math.sqrt(sum(p * p for p in parts)), rel=1e-8)
 
 
+@pytest.mark.parametrize(
+    ("command", "study", "flags", "section"),
+    [
+        ("align", "alignment", ["--duration", "5 min"], {"scenario": {"duration": "5 min"}}),
+        ("calibrate", "calibration", ["--runs", "5"], {"scenario": {"runs": 5}}),
+    ],
+)
+def test_every_study_report_names_its_version_and_scenario(
+    command, study, flags, section, tmp_path, capsys
+):
+    from inserr.scenario.schema import as_scenario, scenario_digest
+
+    path = tmp_path / "s.toml"
+    path.write_text('[site]\nlatitude = "45 deg"\n', encoding="utf-8")
+    out = tmp_path / "rep"
+    assert main([command, str(path), *flags, "--out", str(out), "--json"]) == 0
+    capsys.readouterr()
+    res = json.loads((out / "results.json").read_text())
+    assert res["inserr_version"] == inserr.__version__
+    assert res["scenario"]["site"]["latitude"] == "45 deg"
+    assert res["scenario_file_sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
+    # The file plus the flags, rebuilt as a dict, hash alike (a second route).
+    same = as_scenario({**section, "site": {"latitude": "45 deg"}}, study)
+    assert scenario_digest(same) == res["scenario_sha256"]
+    assert res["scenario_sha256"][:16] in (out / "report.md").read_text(encoding="utf-8")
+
+
 # --- the command line and packaging --------------------------------------------------------
 def test_version_and_python_dash_m(capsys):
     with pytest.raises(SystemExit) as exc:
