@@ -257,6 +257,7 @@ def test_report_carries_the_whole_scenario_data_files_and_provenance(tmp_path, c
     [
         ("align", "alignment", ["--duration", "5 min"], {"scenario": {"duration": "5 min"}}),
         ("calibrate", "calibration", ["--runs", "5"], {"scenario": {"runs": 5}}),
+        ("northfind", "northfinder", ["--runs", "3"], {"scenario": {"runs": 3}}),
     ],
 )
 def test_every_study_report_names_its_version_and_scenario(
