@@ -106,6 +106,21 @@ def test_the_intervals_cover_the_truth_as_often_as_they_say():
     assert all(h >= 19 for h in hits.values()), hits
 
 
+def test_a_rate_ramp_is_recovered_when_present():
+    # A rate ramp R (rate = R t) has the Allan deviation R tau / sqrt(2) exactly
+    # (IEEE Std 952, C.1: the cluster means differ by R tau); over white noise it
+    # rules the long taus, and the fit must find it, within its interval.
+    ramp = 40.0 * DEG_PER_HOUR / HOUR  # rad/s^2
+    n = int(6 * HOUR * RATE)
+    rng = np.random.default_rng(21)
+    x = axis_samples(rng, n, ARW) + ramp * np.arange(n) / RATE
+    fit = allan.fit_terms(allan.allan_deviation(x, RATE))
+    t = fit.terms["rate_ramp"]
+    assert t.resolved and t.low <= ramp <= t.high, (t, ramp)
+    w = fit.terms["white"]
+    assert w.low <= ARW <= w.high
+
+
 def test_the_sampled_flicker_shape_matches_simulated_flicker_noise():
     # The Allan variance of sampled flicker noise at 1 and 4 samples, measured on
     # many generated samples, against flicker_shape (a quadrature of the PSD).
