@@ -162,18 +162,18 @@ def _split_header(cell: str) -> tuple[str, str | None]:
     return cell[: m.start()].strip(), (m.group(1) or None)
 
 
-def _factor(unit: str, kind: str, where: str, flag: str) -> float:
+def _factor(unit: str, kind: str, where: str, argument: str) -> float:
     table = UNITS[kind]
     if unit not in table:
         raise InputError(
             where,
             f"unknown unit {unit!r}",
-            f"use one of {', '.join(u for u in table if u)} (in the header or with {flag})",
+            f"use one of {', '.join(u for u in table if u)} (in the header or with {argument})",
         )
     return table[unit]
 
 
-def check_rate(rate: Any, field: str = "--rate") -> float:
+def check_rate(rate: Any, field: str = "rate") -> float:
     """The sample rate as a positive finite float, Hz, or InputError naming ``field``."""
     try:
         r = float(rate)
@@ -300,29 +300,29 @@ def read_recording(
             k = int(np.flatnonzero(off)[0])
             raise InputError(
                 f"{name}:{lines[k + 1][0]}",
-                f"time step {dt[k]:g} s, not 1/rate = {1.0 / rate:g} s (--rate {rate:g})",
-                "give the recording's sample rate with --rate, or a gap-free recording",
+                f"time step {dt[k]:g} s, not 1/rate = {1.0 / rate:g} s (rate {rate:g} Hz)",
+                "give the recording's sample rate (rate), or a gap-free recording",
             )
     out = {}
-    for s, (sensor, flag_unit, kind, flag) in enumerate(
+    for s, (sensor, given_unit, kind, argument) in enumerate(
         (
-            ("gyro", gyro_unit, "angular_rate", "--gyro-unit"),
-            ("accel", accel_unit, "acceleration", "--accel-unit"),
+            ("gyro", gyro_unit, "angular_rate", "gyro_unit"),
+            ("accel", accel_unit, "acceleration", "accel_unit"),
         )
     ):
         cols = []
         for a in range(3):
             c = 1 + 3 * s + a
-            unit = flag_unit or (header[c][1] if header else None)
+            unit = given_unit or (header[c][1] if header else None)
             where = f"{name}: column {c + 1}" + (f" ({header[c][0]})" if header else "")
             if unit is None:
                 raise InputError(
                     where,
                     f"no unit for the {sensor} {AXES[a]} column",
                     f"declare it in the header, e.g. '{sensor} {AXES[a]} "
-                    f"({'deg/s' if sensor == 'gyro' else 'm/s^2'})', or give {flag}",
+                    f"({'deg/s' if sensor == 'gyro' else 'm/s^2'})', or give {argument}",
                 )
-            cols.append(data[:, c] * _factor(unit, kind, where, flag))
+            cols.append(data[:, c] * _factor(unit, kind, where, argument))
         out[sensor] = np.column_stack(cols)
     return Recording(rate, out["gyro"], out["accel"], name)
 

@@ -216,7 +216,7 @@ def calibrate(scenario: Scenario | str | Path | dict | None = None) -> Calibrati
         raise InputError(
             "calibration.design",
             "the front door runs one position set",
-            "set calibration.design = false (the designer is inserr calibrate --design)",
+            "set calibration.design = false (the designer runs from the inserr calibrate command)",
         )
     summ, results = calibration_summary(inp.position_set, inp.site, inp.truth, inp.config)
     return CalibrationStudy(scen, summ, results)

@@ -57,7 +57,13 @@ def run(args: argparse.Namespace) -> int:
         confidence = float("nan")
     if not 0.5 <= confidence < 1.0:
         raise InputError("--confidence", f"expected a level in [0.5, 1), got {args.confidence!r}")
-    rec = read_recording(args.recording, rate, gyro_unit=args.gyro_unit, accel_unit=args.accel_unit)
+    try:
+        rec = read_recording(
+            args.recording, rate, gyro_unit=args.gyro_unit, accel_unit=args.accel_unit
+        )
+    except InputError as exc:
+        # The library names its arguments; on the command line they are flags.
+        raise InputError(exc.field, *(_flags(t) for t in (exc.problem, exc.fix))) from None
     fit = fit_recording(rec, confidence)
     result = summary(fit)
     if args.out:
@@ -85,3 +91,16 @@ def run(args: argparse.Namespace) -> int:
         lines += ["", f"report written to {result['report']}/report.html"]
     emit(args, result, "\n".join(lines))
     return 0
+
+
+#: The reader's argument names and the flags that set them.
+_ARGUMENT_FLAGS = {"gyro_unit": "--gyro-unit", "accel_unit": "--accel-unit", "(rate": "(--rate"}
+
+
+def _flags(text: str | None) -> str | None:
+    """``text`` with the reader's argument names turned into this command's flags."""
+    if text is None:
+        return None
+    for name, flag in _ARGUMENT_FLAGS.items():
+        text = text.replace(name, flag)
+    return text

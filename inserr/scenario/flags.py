@@ -253,6 +253,16 @@ CONTROLS: dict[str, str] = {
     "no-plots": "no summary plots for a sweep",
 }
 
+#: The flags of ``inserr imu-budget``, the one command that reads a recording, not a
+#: scenario: they describe the file and the fit and set no scenario key. ``--rate`` is
+#: there the recording's sample rate (Hz), as issue 16 spells the command.
+RECORDING_FLAGS: dict[str, str] = {
+    "rate": "sample rate of the recording, Hz",
+    "gyro-unit": "unit of the recording's gyro columns",
+    "accel-unit": "unit of the recording's accelerometer columns",
+    "confidence": "level of the fitted terms' confidence intervals",
+}
+
 #: Flags that repeat (each occurrence adds one list item).
 REPEATED = frozenset({"param"})
 
