@@ -8,6 +8,10 @@
 * ``figures`` — σ(t) and estimation-error figures.
 * ``report`` — the alignment report, for the one writer.
 * ``api`` — the notebook front door: ``align`` from a scenario, file or dict.
+* ``comparison`` — static vs indexed alignment: the filter per scheme on a static and a
+  swinging base, observability per scheme, what indexing costs, a stop-time sweep (the
+  study of ``analyses/alignment_observability``).
+* ``comparison_report`` — its write-up, for the one writer.
 """
 
 from inserr.core.lazy import lazy_exports
@@ -29,6 +33,8 @@ __getattr__, __dir__ = lazy_exports(
         "alignment_inputs": "inserr.alignment.inputs",
         "align": "inserr.alignment.api",
         "AlignmentStudy": "inserr.alignment.api",
+        "SchemeComparison": "inserr.alignment.comparison",
+        "compare_schemes": "inserr.alignment.comparison",
     },
 )
 
@@ -47,4 +53,6 @@ __all__ = [
     "alignment_inputs",
     "align",
     "AlignmentStudy",
+    "SchemeComparison",
+    "compare_schemes",
 ]

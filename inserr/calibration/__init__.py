@@ -10,6 +10,12 @@
 * ``report`` — the calibration report, for the one writer.
 * ``allan`` — IMU noise terms from a static recording: Allan deviation, IEEE slopes.
 * ``api`` — the notebook front door: ``calibrate`` and ``imu_budget``.
+* ``comparison`` — two position sets side by side: baseline, noise-free, equal time,
+  sweeps, designed sets (the study of ``analyses/p1_calibration``).
+* ``comparison_report`` — its write-up, for the one writer.
+* ``published`` — a published Monte Carlo table of two methods beside the model, claim
+  by claim (P1's Table 1).
+* ``published_report`` — the write-up's "Against the paper" section.
 """
 
 from inserr.core.lazy import lazy_exports
@@ -36,6 +42,8 @@ __getattr__, __dir__ = lazy_exports(
         "NoiseBudget": "inserr.calibration.api",
         "read_recording": "inserr.calibration.allan",
         "fit_recording": "inserr.calibration.allan",
+        "compare_sets": "inserr.calibration.comparison",
+        "against_published": "inserr.calibration.published",
     },
 )
 
@@ -59,4 +67,6 @@ __all__ = [
     "NoiseBudget",
     "read_recording",
     "fit_recording",
+    "compare_sets",
+    "against_published",
 ]
