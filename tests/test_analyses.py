@@ -125,8 +125,35 @@ def _check_p3(res: dict) -> None:
     assert req["crlb_heading_mil"] == pytest.approx(sigma / NATO_MIL, rel=0.01)
 
 
+def _check_p2(res: dict) -> None:
+    # P2's traditional cycle: stops at -135, 45, 135, -45 deg (A C D B), reached by turns
+    # of +180, +90, -180, -90 deg at rate w. A turn from h0 to h1 in direction d adds
+    # (sin h1 - sin h0) / (d w) to the integral of cos h (the diagonal of the horizontal
+    # block of C) and -(cos h1 - cos h0) / (d w) to that of sin h (the off-diagonal); the
+    # four stops (opposite pairs) add nothing. The modified cycle cancels the turns too.
+    # Closed forms to roundoff: 1e-9 s.
+    scen = load_scenario(ROOT / "analyses" / "p2_four_position" / "scenario.toml")
+    rate, stop = scen.scheme_rate, scen.scheme_stop
+    path = np.radians([-135.0, 45.0, 135.0, -45.0, -135.0])
+    turn = np.radians([180.0, 90.0, -180.0, -90.0])
+    d = np.sign(turn)
+    diag = np.sum((np.sin(path[1:]) - np.sin(path[:-1])) / (d * rate))
+    off = np.sum(-(np.cos(path[1:]) - np.cos(path[:-1])) / (d * rate))
+    assert abs(off) < 1e-12 and diag == pytest.approx(2 * np.sqrt(2) / rate, rel=1e-12)
+    for start in ("stop", "turn"):
+        trad = res["cycle_integrals"][start]["four-position"]
+        assert np.allclose(trad["horizontal_cycle_integral_s"], diag * np.eye(2), rtol=0, atol=1e-9)
+        assert np.allclose(trad["stops_horizontal_s"], 0.0, atol=1e-9)
+        # Four stops and 540 deg of turning per cycle.
+        cycle = 4 * stop + np.abs(turn).sum() / rate
+        assert trad["cycle_time_s"] == pytest.approx(cycle, rel=1e-12)
+        mod = res["cycle_integrals"][start]["four-position-modified"]
+        assert np.allclose(mod["horizontal_cycle_integral_s"], 0.0, atol=1e-9)
+
+
 CHECKS = {
     "alignment_observability/run.py": _check_alignment,
     "p1_calibration/run.py": _check_p1,
     "p3_northfinder/run.py": _check_p3,
+    "p2_four_position/run.py": _check_p2,
 }
