@@ -14,6 +14,7 @@ only imports chapters above it in this list (``docs/architecture.md``):
 * :mod:`inserr.calibration` — multi-position calibration on a two-axis table.
 * :mod:`inserr.northfinder` — the rotation-modulation north finder (one gyro, one accelerometer).
 * :mod:`inserr.sweep` — design sweeps over a grid of scenario changes, on Dask.
+* :mod:`inserr.design` — the indexing schedule designed for a set of vehicle motions.
 * :mod:`inserr.cli` — the ``inserr`` command: argparse and formatting only.
 
 Conventions (stated once, with equations, in ``docs/theory.md``):
@@ -35,6 +36,14 @@ Conventions (stated once, with equations, in ``docs/theory.md``):
 * Units: SI inside (rad, s, m, m/s, m/s^2, rad/s); named constants of
   :mod:`inserr.core.units` and strings with units only at the edges (scenario
   files, flags, reports).
+
+The notebook front door (every result has ``metrics()``, ``to_dataframe()``,
+``budget()``, ``plot()`` and a Jupyter summary; ``docs/tutorials/notebook.md``):
+``inserr.load_scenario(path)``, ``inserr.drift(scenario, scheme)``,
+``inserr.compare(scenario, schemes)``, ``inserr.align(scenario)``,
+``inserr.calibrate(scenario)``, ``inserr.northfind(scenario)``,
+``inserr.sweep(scenario, params)``, ``inserr.imu_budget(recording, rate)``
+(``inserr.drift`` and ``inserr.sweep`` are the subpackages, callable).
 
 Public entry points, importable from ``inserr`` directly (each imported on first
 use, so ``import inserr`` itself imports no other module: not numpy, matplotlib,
@@ -64,6 +73,7 @@ SUBPACKAGES = (
     "calibration",
     "northfinder",
     "sweep",
+    "design",
     "cli",
 )
 
@@ -83,6 +93,13 @@ _EXPORTS = {
     "run_scheme": "inserr.drift.study",
     "validate": "inserr.reference.validation",
     "run_alignment": "inserr.alignment.filter",
+    # The notebook front door (``inserr.drift`` and ``inserr.sweep`` are the callable
+    # subpackages themselves; see inserr.core.lazy.callable_package).
+    "compare": "inserr.drift.api",
+    "align": "inserr.alignment.api",
+    "calibrate": "inserr.calibration.api",
+    "northfind": "inserr.northfinder.api",
+    "imu_budget": "inserr.calibration.api",
 }
 
 __all__ = ["__version__", *_EXPORTS]

@@ -28,6 +28,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "northfind": ("inserr.cli.northfind", "Rotation-modulation north finder (1 gyro, 1 accel)."),
     "sweep": ("inserr.cli.sweep", "Parameter sweep of a scenario on Dask."),
     "design": ("inserr.cli.design", "Design an indexing schedule robust to the vehicle's motion."),
+    "imu-budget": (
+        "inserr.cli.imu_budget",
+        "IMU noise terms (ARW, bias instability, RRW) from a static recording (Allan deviation).",
+    ),
 }
 
 
@@ -57,6 +61,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         prog="inserr",
         description="Error analysis of rotation-modulated strapdown inertial navigation.",
     )
+    from inserr import __version__
+
+    parser.add_argument("--version", action="version", version=f"inserr {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name, (module, help_) in available_commands().items():
         p = sub.add_parser(name, help=help_, description=help_)

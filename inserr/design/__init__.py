@@ -8,17 +8,32 @@ set of vehicle motions, within a motor-start budget. Layer: above
 
 Modules
 -------
-* :mod:`~inserr.design.motions`: the motion set (grid, seeded random draws, heading
-  histories) and the held-out motions;
-* :mod:`~inserr.design.families`: what is searched (single-axis tables with free stop
-  times and turn angles, the closed-loop rules' parameters, dual-axis orders);
-* :mod:`~inserr.design.objective`: one evaluation (a schedule on one motion: RMS
-  horizontal error over unknown signs, motor starts, turning time, table range) and
-  the task the engines run;
-* :mod:`~inserr.design.cache`: the content-addressed store of every evaluation, which
-  makes a design resumable;
-* :mod:`~inserr.design.search`: the optimizer (scipy's differential evolution, its
-  generations evaluated in batches on Dask) and the verification at the full horizon;
-* :mod:`~inserr.design.study`: the whole design, the comparison with the catalogue,
-  the Pareto front and the report; :mod:`~inserr.design.figures` its figures.
+* ``motions`` — the motion set (grid, seeded random draws, heading histories) and the
+  held-out motions.
+* ``families`` — what is searched: single-axis tables with free stop times and turn
+  angles, the closed-loop rules' parameters, dual-axis orders.
+* ``objective`` — one evaluation (a schedule on one motion: RMS horizontal error over
+  unknown signs, motor starts, turning time, table range) and the task the engines run.
+* ``cache`` — the content-addressed store of every evaluation, which makes a design
+  resumable.
+* ``search`` — the optimizer (scipy's differential evolution, its generations
+  evaluated in batches on Dask).
+* ``study`` — the whole design: verification at the full horizon, the comparison with
+  the catalogue, the Pareto front, the report and the chosen scheme file.
+* ``figures`` — its figures.
 """
+
+from inserr.core.lazy import lazy_exports
+
+__getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "run_design": "inserr.design.study",
+        "DesignOutcome": "inserr.design.study",
+        "build_family": "inserr.design.families",
+        "design_motions": "inserr.design.motions",
+        "held_out_motions": "inserr.design.motions",
+    },
+)
+
+__all__ = ["run_design", "DesignOutcome", "build_family", "design_motions", "held_out_motions"]

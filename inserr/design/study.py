@@ -34,7 +34,6 @@ import numpy as np
 
 from inserr.core.errors import InputError
 from inserr.core.units import DEG, HOUR
-from inserr.design import figures
 from inserr.design.cache import EvaluationCache
 from inserr.design.families import Family, build_family
 from inserr.design.motions import MotionCase, canonical, design_motions, held_out_motions
@@ -476,6 +475,7 @@ def _results(scen: Scenario, o: DesignOutcome) -> dict[str, Any]:
 
 
 def _schedule_figure(scen: Scenario, st: Settings, chosen: Scored):
+    from inserr.design import figures  # matplotlib only when a figure is drawn
     from inserr.design.motions import build_motion
     from inserr.design.objective import candidate_scheme
 
@@ -529,6 +529,7 @@ def _fmt_motion_set(ms: list[MotionCase]) -> str:
 
 def build_report(scen: Scenario, o: DesignOutcome, title: str | None = None) -> Report:
     """The design report: settings, the chosen schedule, comparisons, front, search."""
+    from inserr.design import figures  # matplotlib only when a report is built
     from inserr.drift.study import describe
 
     st = o.settings

@@ -6,6 +6,8 @@
 * ``figure_style`` — sizes, resolution, fonts, grid and a colour per scheme; figures on
   :class:`matplotlib.figure.Figure`, never pyplot.
 * ``progress`` — progress bars on a terminal, silent otherwise.
+* ``results`` — the interface every study result offers a notebook (``metrics``,
+  ``to_dataframe``, ``budget``, ``plot``, Jupyter HTML) and its helpers.
 """
 
 from inserr.core.lazy import lazy_exports
@@ -21,6 +23,8 @@ __getattr__, __dir__ = lazy_exports(
         "write_text_atomic": "inserr.output.report",
         "progress": "inserr.output.progress",
         "set_quiet": "inserr.output.progress",
+        "StudyResult": "inserr.output.results",
+        "budget_frame": "inserr.output.results",
     },
 )
 
@@ -33,4 +37,6 @@ __all__ = [
     "write_text_atomic",
     "progress",
     "set_quiet",
+    "StudyResult",
+    "budget_frame",
 ]

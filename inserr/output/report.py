@@ -24,6 +24,7 @@ Layout of a report directory::
     report.md        (REPORT.md for the analyses' write-ups) title, blocks, figure links
     report.html      the same, self-contained (PNG figures base64-embedded)
     <name>.png       one file per figure, named by the study
+    <name>.csv ...   data files a study attaches (e.g. timeseries.csv, budget.csv)
     results.json     the study's numbers (strict JSON, engineering units)
     .inserr-report   marker: written by inserr, replaced as a whole (write only)
 """
@@ -255,15 +256,35 @@ class Report:
         """
         self.blocks.append(_Block("markdown", text.strip("\n")))
 
-    def figure(self, fig, name: str, caption: str = "") -> None:
+    def figure(self, fig, name: str, caption: str = "", *, crop: bool = True) -> None:
         """Add a matplotlib figure, saved as ``<name>.png`` and embedded in the HTML.
 
         The figure is finished in the inserr style (:func:`.figure_style.finish`) and
-        rendered at once; the caller's figure is not needed afterwards.
+        rendered at once; the caller's figure is not needed afterwards. ``crop=False``
+        renders the figure as laid out, without the tight crop (one drawing instead of
+        two: for figures whose layout already fits everything, see
+        :func:`.figure_style.png_bytes`).
         """
         from inserr.output.figure_style import finish, png_bytes
 
-        self.blocks.append(_Block("figure", (name, caption, png_bytes(finish(fig)))))
+        self.blocks.append(_Block("figure", (name, caption, png_bytes(finish(fig), crop=crop))))
+
+    def attach(self, name: str, data: str | bytes, caption: str = "") -> None:
+        """Add a data file (e.g. ``timeseries.csv``) written beside the report and linked.
+
+        Parameters
+        ----------
+        name : str
+            File name inside the report directory (no directory part).
+        data : str or bytes
+            Content; text is written as UTF-8.
+        caption : str
+            What the file holds (shown with the link).
+        """
+        if not name or "/" in name or "\\" in name or name.startswith("."):
+            raise ValueError(f"attachment name must be a plain file name, got {name!r}")
+        payload = data.encode("utf-8") if isinstance(data, str) else bytes(data)
+        self.blocks.append(_Block("file", (name, caption, payload)))
 
     # --- rendering ------------------------------------------------------------
     def markdown(self) -> str:
@@ -286,6 +307,9 @@ class Report:
                 out += [f"![{caption or name}]({name}.png)", ""]
                 if caption:
                     out += [f"*{caption}*", ""]
+            elif b.kind == "file":
+                name, caption, _ = b.payload
+                out += [f"- [{name}]({name})" + (f": {caption}" if caption else ""), ""]
         return "\n".join(out)
 
     def html(self) -> str:
@@ -294,9 +318,14 @@ class Report:
         out = [
             "<!DOCTYPE html><html><head><meta charset='utf-8'>",
             f"<title>{esc(self.title)}</title>",
-            "<style>body{font-family:sans-serif;max-width:60em;margin:auto;padding:1em}"
+            # Wide enough for an 11 in figure at its own 110 dpi (1210 px): figures show
+            # at 100 % on a usual screen, so their 7-10 pt text stays legible.
+            "<style>body{font-family:sans-serif;max-width:1300px;margin:auto;padding:1em}"
+            "figure{margin:1em 0}"
             "table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px;"
-            "text-align:right}th{background:#eee}img{max-width:100%}</style>",
+            "text-align:right}th{background:#eee}td:first-child{text-align:left}"
+            "img{max-width:100%;height:auto}figcaption{font-style:italic;margin:0.3em 0 1em}"
+            "</style>",
             "</head><body>",
             f"<h1>{esc(self.title)}</h1>",
         ]
@@ -315,6 +344,10 @@ class Report:
                     f"<figure><img alt='{esc(name)}' src='data:image/png;base64,{data}'>"
                     f"<figcaption>{esc(caption)}</figcaption></figure>"
                 )
+            elif b.kind == "file":
+                name, caption, _ = b.payload
+                text = f": {esc(caption)}" if caption else ""
+                out.append(f"<p class='file'><a href='{esc(name)}'>{esc(name)}</a>{text}</p>")
         out.append("</body></html>")
         return "\n".join(out)
 
@@ -339,6 +372,9 @@ class Report:
             if b.kind == "figure":
                 name, _, png = b.payload
                 out[f"{name}.png"] = png
+            elif b.kind == "file":
+                name, _, data = b.payload
+                out[name] = data
         out["results.json"] = dumps(self.results).encode("utf-8")
         return out
 

@@ -145,6 +145,9 @@ FLAGS: dict[str, Flag] = {
     # [output]
     "step": _F("output.step", "s", "output step of the deterministic run"),
     "covariance-step": _F("output.covariance_step", "s", "output step of covariance results"),
+    "export-step": _F(
+        "output.export_step", "s", "row step of the exported time series (timeseries.csv)"
+    ),
     "substep": _F("output.substep", "s", "sub-step of continuous motion"),
     "vertical": _F("output.vertical", None, "vertical channel"),
     "engine": _F("output.engine", None, "drift engine: fast, or exact (step by step, reference)"),
@@ -258,6 +261,16 @@ CONTROLS: dict[str, str] = {
     "no-plots": "no summary plots for a sweep",
 }
 
+#: The flags of ``inserr imu-budget``, the one command that reads a recording, not a
+#: scenario: they describe the file and the fit and set no scenario key. ``--rate`` is
+#: there the recording's sample rate (Hz), as issue 16 spells the command.
+RECORDING_FLAGS: dict[str, str] = {
+    "rate": "sample rate of the recording, Hz",
+    "gyro-unit": "unit of the recording's gyro columns",
+    "accel-unit": "unit of the recording's accelerometer columns",
+    "confidence": "level of the fitted terms' confidence intervals",
+}
+
 #: Flags that repeat (each occurrence adds one list item).
 REPEATED = frozenset({"param"})
 
@@ -280,7 +293,7 @@ IMU_FLAGS = (
 INITIAL = ("initial-attitude", "initial-velocity", "initial-position")
 MOTION = ("heading", "pitch", "roll", "turn-rate", "yaw-swing")
 SCHEME = ("scheme", "rate", "stop", "reversal", "delta", "variant")
-OUTPUT = ("step", "covariance-step", "substep", "vertical", "engine")
+OUTPUT = ("step", "covariance-step", "export-step", "substep", "vertical", "engine")
 #: The scenario flags of ``drift`` (and ``compare``, ``validate``, ``sweep``).
 DRIFT = ("duration", *SITE, *IMU_FLAGS, *INITIAL, *MOTION, *SCHEME, *OUTPUT)
 #: The flags of ``design`` beyond :data:`DRIFT`.

@@ -132,6 +132,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "output": {
         "step": _K("time", None, "1 s", "output step of the deterministic run"),
         "covariance_step": _K("time", None, "60 s", "output step of covariance results"),
+        "export_step": _K(
+            "time", None, "60 s", "row step of timeseries.csv and to_dataframe (x output.step)"
+        ),
         "substep": _K("time", None, "1 s", "sub-step of continuous motion (exact engine)"),
         "vertical": _K("str", None, "clamped", "vertical channel"),
         "engine": _K("str", None, "fast", "drift engine: fast | exact (step by step)"),
@@ -724,9 +727,17 @@ def scenario_from_dict(
             raise InputError("scheme.rate", "table rate must be > 0", "give e.g. 6 deg/s")
         if sh["stop"] < 0:
             raise InputError("scheme.stop", "stop time must be >= 0", "give e.g. 300 s")
-    for key in ("step", "covariance_step", "substep"):
+    for key in ("step", "covariance_step", "substep", "export_step"):
         if out[key] <= 0:
             raise InputError(f"output.{key}", "must be > 0", "give e.g. 1 s")
+    ratio = out["export_step"] / out["step"]
+    if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-9 * ratio:
+        # The exported rows are samples of the deterministic run, never interpolations.
+        raise InputError(
+            "output.export_step",
+            f"{out['export_step']:g} s is not a multiple of output.step ({out['step']:g} s)",
+            f"use a multiple of it, e.g. {max(round(ratio), 1) * out['step']:g} s",
+        )
     if study == "drift":
         # The engine keeps every output sample (and, under continuous motion, every
         # sub-step segment) in memory: about 1.3 MB per hour at 1 s, so 30 days at 1 s
@@ -856,3 +867,85 @@ def _steps(rows: list[dict]):
             raise InputError(f"{fld}.rotation_time", "must be > 0")
         steps.append(Step(gimbal, angle, dwell, rt, str(row.get("label", f"P{i + 1}"))))
     return steps
+
+
+def as_scenario(obj: Any, study: str = "drift") -> Scenario:
+    """A scenario from what a notebook user has at hand: a Scenario, a file or a dict.
+
+    Parameters
+    ----------
+    obj : Scenario, str, Path or mapping
+        A validated scenario (re-read with ``study``'s defaults if it was built for
+        another study), the path of a TOML file, or a nested dict as a file holds it.
+    study : str
+        Whose defaults fill the absent keys (a key of :data:`STUDY_DEFAULTS`).
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    InputError
+        A bad file or value (as :func:`load_scenario`), or an object of another type.
+    """
+    if isinstance(obj, Scenario):
+        if obj.study == study:
+            return obj
+        return scenario_from_dict(obj.raw, obj.base_dir, study=study, analysis=obj.analysis)
+    if isinstance(obj, (str, Path)):
+        return load_scenario(obj, study=study)
+    if isinstance(obj, Mapping):
+        return scenario_from_dict(dict(obj), study=study)
+    raise InputError(
+        "scenario",
+        f"expected a Scenario, a TOML file path or a dict, got {type(obj).__name__}",
+        "pass inserr.load_scenario(path), the path itself, or a dict of sections",
+    )
+
+
+def resolved_scenario(scen: Scenario) -> dict[str, dict[str, Any]]:
+    """Every key the scenario's study reads, as written or defaulted, units as text.
+
+    The sections the drift engine reads (:data:`_CORE_SECTIONS`) in full, plus every
+    other section the scenario wrote; each value as the file holds it (a string with
+    its unit), the default filling each absent key. Together with
+    :func:`scenario_digest` this says exactly which inputs produced a report.
+
+    Parameters
+    ----------
+    scen : Scenario
+
+    Returns
+    -------
+    dict
+        Section -> key -> value (JSON-ready: strings, numbers, booleans, lists).
+    """
+    out: dict[str, dict[str, Any]] = {}
+    for section, keys in SCHEMA.items():
+        given = scen.raw.get(section, {})
+        if section not in _CORE_SECTIONS and not given:
+            continue
+        table = {}
+        for key in keys:
+            value = given[key] if key in given else study_default(f"{section}.{key}", scen.study)
+            if value is not None:
+                table[key] = copy.deepcopy(value)
+        out[section] = table
+    if scen.raw.get(ANALYSIS):
+        out[ANALYSIS] = copy.deepcopy(scen.raw[ANALYSIS])
+    return out
+
+
+def scenario_digest(scen: Scenario) -> str:
+    """SHA-256 (hex) of :func:`resolved_scenario` as canonical JSON (sorted keys).
+
+    The same inputs give the same digest whether written in a file or given by
+    flags, and a key written with its default text hashes like an absent one. (A
+    heading-history file is named by its path; its content is not hashed.)
+    """
+    import hashlib
+    import json
+
+    text = json.dumps(resolved_scenario(scen), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
