@@ -152,9 +152,25 @@ def _check_p2(res: dict) -> None:
         assert np.allclose(mod["horizontal_cycle_integral_s"], 0.0, atol=1e-9)
 
 
+def _check_design(res: dict) -> None:
+    # The designed schedule and every catalogue scheme on the same motions; the worst case
+    # is the maximum of the per-motion values, the table at rest turns no motor, and the
+    # chosen schedule keeps the starts budget it was designed under.
+    for design in (res["p0_vehicle"], res["p0_vehicle_nulling"], res["static_base"]):
+        n = len(design["settings"]["motions"])
+        limit = design["settings"]["limits"]["max_starts"]
+        ch = design["chosen"]
+        assert ch["starts_per_hour"] <= limit * (1 + 1e-12)
+        for c in [ch, *design["catalogue"]]:
+            assert len(c["rms_nmi"]) == n and c["worst_nmi"] == max(c["rms_nmi"])
+        none = next(c for c in design["catalogue"] if c["label"] == "none")
+        assert none["starts_per_hour"] == 0.0
+
+
 CHECKS = {
     "alignment_observability/run.py": _check_alignment,
     "p1_calibration/run.py": _check_p1,
     "p3_northfinder/run.py": _check_p3,
     "p2_four_position/run.py": _check_p2,
+    "design_p0/run.py": _check_design,
 }

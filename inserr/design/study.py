@@ -556,7 +556,7 @@ def build_report(scen: Scenario, o: DesignOutcome, title: str | None = None) -> 
         + [
             ["motion set", _fmt_motion_set(st.motions)],
             ["held-out motions", _fmt_motion_set(st.held_out)],
-            ["engine", o.engine],
+            ["evaluations run on", o.engine],
             [
                 "time",
                 f"{o.seconds:.0f} s ({o.computed} motion evaluations computed, "
