@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
+import threading
+from contextlib import contextmanager
 
 from inserr.core.errors import InputError
 
@@ -63,6 +66,33 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def input_files(args: argparse.Namespace) -> list[str]:
+    """The files a command reads that are named on its command line (the scenario file)."""
+    path = getattr(args, "scenario", None)
+    return [path] if path else []
+
+
+@contextmanager
+def _terminate_as_interrupt():
+    """Let SIGTERM (``kill PID``) unwind like Ctrl-C, so no partial output is kept.
+
+    Only in the main thread of the process (where Python delivers signals); the
+    previous handler is restored afterwards.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the process exit status (0 ok, 2 bad input, 1 failure)."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -83,8 +113,9 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, "out", None) is not None and args.command not in _OWN_OUT_CHECK:
             from inserr.output.report import check_report_dir
 
-            check_report_dir(args.out, "--out")
-        return int(module.run(args) or 0)
+            check_report_dir(args.out, "--out", inputs=input_files(args))
+        with _terminate_as_interrupt():
+            return int(module.run(args) or 0)
     except InputError as exc:
         from inserr.scenario.flags import name_the_flag
 
