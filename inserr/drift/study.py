@@ -86,7 +86,12 @@ class SchemeRun:
 
 def run_scheme(scen: Scenario, name: str | None = None) -> SchemeRun:
     """Drift analysis of ``scen`` under its scheme (or ``name``)."""
-    name = name or scen.scheme_name
+    if name is None:
+        name = scen.scheme_name
+    elif not isinstance(name, str):
+        raise TypeError(f"scheme.name: expected a scheme name (str), got {type(name).__name__}")
+    elif not name.strip():
+        raise InputError("scheme.name", "empty scheme name", "give a scheme name or None")
     hist = scen.history(name)
     res = analyze_drift(
         scen.site,

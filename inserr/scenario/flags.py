@@ -395,6 +395,11 @@ def _flag_value(name: str, value: Any) -> Any:
             return float(str(value).strip())
         except ValueError:
             raise InputError(where, f"{value!r} is not a number") from None
+    if kind in ("list", "int-list") and name not in REPEATED:
+        # "a,,b" or a trailing comma: refuse rather than silently drop (or run the
+        # base scheme for) the empty item.
+        if any(not s.strip() for s in str(value).split(",")):
+            raise InputError(where, f"empty item in {value!r}", "remove the extra comma")
     if kind == "list":
         return list(value) if name in REPEATED else _split(value)
     if kind == "int-list":
