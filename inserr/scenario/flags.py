@@ -445,6 +445,9 @@ def flags_to_dict(args: argparse.Namespace, names: Iterable[str] | None = None) 
 
 def merge(base: dict, over: dict) -> dict:
     """Section-wise merge of two nested scenario tables (``over`` wins)."""
+    for k, v in base.items():
+        if not isinstance(v, dict):  # ``site = "x"``: validated here, before the merge
+            raise InputError(k, "must be a table ([section])", f"write [{k}] and its keys")
     out = {k: dict(v) for k, v in base.items()}
     for section, table in over.items():
         out.setdefault(section, {}).update(table)
