@@ -728,3 +728,35 @@ def ok_scenario(tmp_path) -> Path:
         encoding="utf-8",
     )
     return path
+
+
+@pytest.mark.parametrize(
+    "argv, package, extra",
+    [
+        (["sweep", "--duration", "1h", "--param", "stop=60,300", "--no-plots"], "dask", "sweep"),
+        (["validate", "--duration", "0.1h"], "pyins", "reference"),
+    ],
+    ids=["sweep without dask", "validate without pyins"],
+)
+def test_missing_optional_extra_names_the_pip_install(argv, package, extra, monkeypatch, tmp_path):
+    # A package set to None in sys.modules cannot be imported (ModuleNotFoundError), as
+    # after the README's plain ``pip install .``; the modules that import it are
+    # dropped so that they import again.
+    for name in list(sys.modules):
+        if name.split(".")[0] == package or name.startswith(("inserr.sweep", "inserr.cli.sweep")):
+            monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, package, None)
+    monkeypatch.chdir(tmp_path)
+    rc, _, err = run_cli([*argv, "--out", str(tmp_path / "o")])
+    assert_one_clear_line(rc, err, argv[0])
+    assert f"pip install 'inserr[{extra}]'" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_every_range_is_documented():
+    from inserr.scenario.schema import NUMBER_RANGES, RANGES
+
+    text = (ROOT / "docs" / "scenarios.md").read_text(encoding="utf-8")
+    section = text.split("## Ranges", 1)[1].split("\n## ", 1)[0]
+    for key in [*RANGES, *NUMBER_RANGES]:
+        assert f"| `{key}` |" in section, key

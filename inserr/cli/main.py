@@ -93,6 +93,24 @@ def _terminate_as_interrupt():
         signal.signal(signal.SIGTERM, previous)
 
 
+#: Optional packages (top-level import names) -> the extra of inserr that installs them.
+OPTIONAL_EXTRAS = {"dask": "sweep", "distributed": "sweep", "pyins": "reference"}
+
+
+def _missing_extra(command: str, exc: ModuleNotFoundError) -> int:
+    """One line naming the ``pip install`` that fixes a missing optional package."""
+    top = (exc.name or "").split(".")[0]
+    extra = OPTIONAL_EXTRAS.get(top)
+    if extra is None:  # not an optional extra: a broken installation, keep the traceback
+        raise exc
+    print(
+        f"inserr {command}: error: needs the optional package {top!r}, which is not installed. "
+        f"Fix: pip install 'inserr[{extra}]'",
+        file=sys.stderr,
+    )
+    return 2
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the process exit status (0 ok, 2 bad input, 1 failure)."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -102,7 +120,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 2
-    module = importlib.import_module(COMMANDS[args.command][0])
+    try:
+        module = importlib.import_module(COMMANDS[args.command][0])
+    except ModuleNotFoundError as exc:
+        return _missing_extra(args.command, exc)
     if getattr(args, "json", False):
         from inserr.output.progress import set_quiet
 
@@ -122,6 +143,8 @@ def main(argv: list[str] | None = None) -> int:
         # The library names scenario keys; add the flag where the value came from one.
         print(f"inserr {args.command}: error: {name_the_flag(exc, args)}", file=sys.stderr)
         return 2
+    except ModuleNotFoundError as exc:
+        return _missing_extra(args.command, exc)
     except KeyboardInterrupt:
         what = (
             "finished points are kept; rerun with the same --out to resume"
