@@ -310,6 +310,21 @@ def test_bad_scenario_file_is_one_line_and_exit_2(text, tmp_path, monkeypatch):
     assert out == "" and snapshot(tmp_path) == before
 
 
+def test_cycle_refuses_a_custom_table_that_does_not_return_to_its_start(tmp_path):
+    path = tmp_path / "c.toml"
+    rows = '[[scheme.steps]]\ngimbal = "inner"\nangle = "{}"\ndwell = "100 s"\n'
+    path.write_text('[scheme]\nname = "custom"\n' + rows.format("90 deg"), encoding="utf-8")
+    rc, _, err = run_cli(["cycle", str(path), "--json"])
+    assert_one_clear_line(rc, err, "cycle")
+    assert "scheme.steps" in err and "90 deg" in err
+    # +90 then -90 (or four times +90) returns to the start: accepted.
+    for angles in (["90 deg", "-90 deg"], ["90 deg"] * 4):
+        text = '[scheme]\nname = "custom"\n' + "".join(rows.format(a) for a in angles)
+        path.write_text(text, encoding="utf-8")
+        rc, _, err = run_cli(["cycle", str(path), "--json"])
+        assert rc == 0, err
+
+
 def test_a_utf8_bom_is_accepted(tmp_path):
     path = tmp_path / "bom.toml"
     path.write_bytes('\ufeff[scenario]\nduration = "1 h"\n'.encode())
