@@ -251,8 +251,18 @@ def _run(argv: list[str], cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True)
 
 
-def capture(out: Path, only: str = "") -> int:
-    """Run every command and analysis; store ``<name>.json`` in ``out``."""
+#: Commands that take the drift engine's ``--engine`` flag.
+DRIFT_FAMILY = ("drift", "compare", "validate", "sweep")  # run reads its file only
+
+
+def capture(out: Path, only: str = "", engine: str | None = None) -> int:
+    """Run every command and analysis; store ``<name>.json`` in ``out``.
+
+    ``engine`` ("exact" or "fast") is passed to the drift-family commands as
+    ``--engine`` (the analyses run with the default): with "exact", the step-by-step
+    engine of earlier versions answers, so a capture can be held against one made
+    before the fast engine existed.
+    """
     out.mkdir(parents=True, exist_ok=True)
     failed = 0
     with tempfile.TemporaryDirectory() as tmp:
@@ -260,6 +270,8 @@ def capture(out: Path, only: str = "") -> int:
             if only and not name.startswith(only):
                 continue
             argv = [sys.executable, "-m", "inserr.cli.main", *(a.format(tmp=tmp) for a in args)]
+            if engine and args[0] in DRIFT_FAMILY:
+                argv += ["--engine", engine]
             proc = _run(argv, Path(tmp))
             if proc.returncode != 0:
                 print(f"{name}: exit {proc.returncode}: {proc.stderr.strip()[-400:]}")
@@ -345,6 +357,12 @@ def main(argv: list[str] | None = None) -> int:
     c = sub.add_parser("capture")
     c.add_argument("dir")
     c.add_argument("--only", default="", help="only names starting with this")
+    c.add_argument(
+        "--engine",
+        choices=("fast", "exact"),
+        default=None,
+        help="drift engine of the drift-family commands (default: theirs)",
+    )
     d = sub.add_parser("compare")
     d.add_argument("old")
     d.add_argument("new")
@@ -354,7 +372,7 @@ def main(argv: list[str] | None = None) -> int:
     d.add_argument("--only", default="", help="only names starting with this")
     args = ap.parse_args(argv)
     if args.cmd == "capture":
-        return capture(Path(args.dir), args.only)
+        return capture(Path(args.dir), args.only, args.engine)
     ignore = {k for k in args.ignore.split(",") if k}
     return compare(Path(args.old), Path(args.new), args.rtol, args.atol, ignore, args.only)
 

@@ -1,0 +1,270 @@
+"""The IMU attitude timelines that schemes and vehicle motions produce are self-consistent.
+
+A :class:`~inserr.model.timeline.Timeline` promises that the constant angular velocity
+``w_k`` of each interval carries the node attitude ``C_s^n(t_k)`` into
+``C_s^n(t_{k+1}) = expm(dt_k [w_k x]) C_s^n(t_k)``: the error model integrates ``w``, the
+projections use the nodes, so the two must agree for every gimbal (outer and inner,
+in any order), every motion (static, tilted, swinging) and every sub-step. The check
+uses scipy's matrix exponential, not inserr's rotation code.
+
+The cycle integral of ``C_s^n`` read off the timeline (exact per interval, Simpson on
+a fine grid along turns) also equals the closed form of
+:func:`inserr.schemes.cycle_integrals.cycle_integrals`, which is written from the gimbal
+geometry independently of the timeline composition.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+from inserr.core.units import DEG
+from inserr.schemes.catalogue import build_scheme
+from inserr.schemes.composition import build_timeline
+from inserr.schemes.cycle_integrals import cycle_integrals
+from inserr.schemes.open_loop import Step, TableScheme
+from inserr.schemes.vehicle_motion import Motion, YawSwing
+
+
+def _skew(w: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+
+
+def _max_interval_mismatch(tl) -> float:
+    dt = np.diff(tl.times)
+    # expm(dt [w x]) by scipy for a handful of intervals, Rodrigues (written below) for all.
+    for k in range(min(3, len(dt))):
+        assert np.allclose(
+            sl.expm(dt[k] * _skew(tl.omega_n[k])), _rodrigues(tl.omega_n[k], dt[k : k + 1])[0]
+        )
+    carried = np.array(
+        [_rodrigues(w, np.array([h]))[0] for w, h in zip(tl.omega_n, dt, strict=True)]
+    )
+    return float(np.abs(carried @ tl.c_sn[:-1] - tl.c_sn[1:]).max())
+
+
+TILTED = Motion(heading=0.4, pitch=3 * DEG, roll=-2 * DEG)
+#: A dual-axis table with quarter turns of the outer gimbal: the inner axis then lies
+#: along body y, where the catalogue's half turns (outer angle 0 or 180 deg) cannot tell
+#: the inner axis's sense or the gimbal order apart.
+QUARTER = TableScheme(
+    "quarter-turns",
+    (
+        Step("outer", 90 * DEG, 20.0, label="B"),
+        Step("inner", 180 * DEG, 20.0, label="C"),
+        Step("outer", 90 * DEG, 20.0, label="D"),
+        Step("inner", -180 * DEG, 20.0, label="E"),
+        Step("outer", -180 * DEG, 20.0, label="A"),
+    ),
+    6 * DEG,
+    20.0,
+)
+
+
+def _scheme(name: str, stop: float):
+    return QUARTER if name == "quarter-turns" else build_scheme(name, 6 * DEG, stop)
+
+
+@pytest.mark.parametrize(
+    "scheme, motion",
+    [
+        ("two-position", Motion()),
+        ("four-position", TILTED),
+        ("eight-position", Motion()),
+        ("eight-position", TILTED),
+        ("sixteen-position", TILTED),
+        ("quarter-turns", Motion()),
+        ("quarter-turns", TILTED),
+        ("two-position", YawSwing(pitch=2 * DEG, roll=1 * DEG, amplitude=5 * DEG, period=90.0)),
+        ("eight-position", YawSwing(pitch=2 * DEG, roll=1 * DEG, amplitude=5 * DEG, period=90.0)),
+    ],
+    ids=lambda p: p if isinstance(p, str) else type(p).__name__ + ("-tilted" if p.pitch else ""),
+)
+def test_interval_rates_carry_each_node_attitude_into_the_next(scheme, motion):
+    s = _scheme(scheme, 20.0)
+    duration = 1.5 * (s.cycle_time or 200.0)
+    tl = build_timeline(s.plan(motion, duration), motion, duration)
+    # Exact intervals (stops, turns on a static base): w is the exact rate, error ~1e-15
+    # per interval. Sub-steps of a swinging base: w is the geodesic rate between exact
+    # nodes, so the nodes are carried exactly too. Wrong gimbal order, axis or frame
+    # of a rate: an O(rate x dt) ~ 0.1 error.
+    assert _max_interval_mismatch(tl) < 1e-9
+
+
+def _timeline_cycle_integral(tl, t0: float, t1: float) -> np.ndarray:
+    """int_{t0}^{t1} C_s^n dt along the timeline's own intervals (exact per interval)."""
+    total = np.zeros((3, 3))
+    for k, w in enumerate(tl.omega_n):
+        a, b = max(tl.times[k], t0), min(tl.times[k + 1], t1)
+        if b <= a:
+            continue
+        c_a = sl.expm((a - tl.times[k]) * _skew(w)) @ tl.c_sn[k]
+        rate = np.linalg.norm(w)
+        h = b - a
+        if rate == 0.0:
+            total += c_a * h
+            continue
+        # int_0^h expm(s [w x]) ds, Rodrigues integrated in closed form.
+        u = _skew(w / rate)
+        th = rate * h
+        integral = (
+            h * np.eye(3) + (1 - math.cos(th)) / rate * u + (h - math.sin(th) / rate) * (u @ u)
+        )
+        total += integral @ c_a
+    return total
+
+
+@pytest.mark.parametrize(
+    "scheme", ["four-position", "eight-position", "sixteen-position", "quarter-turns"]
+)
+@pytest.mark.parametrize("motion", [Motion(), TILTED], ids=["level", "tilted"])
+def test_timeline_cycle_integral_equals_the_closed_form(scheme, motion):
+    s = _scheme(scheme, 30.0)
+    cycle = s.cycle_time
+    tl = build_timeline(s.plan(motion, s.first_dwell + cycle), motion, s.first_dwell + cycle)
+    got = _timeline_cycle_integral(tl, s.first_dwell, s.first_dwell + cycle)
+    want = cycle_integrals(s, motion).full
+    # Both exact; quantized rates (1e-13 rad/s over ~1000 s) and roundoff: ~1e-9 s.
+    assert np.allclose(got, want, rtol=0, atol=1e-7)
+
+
+def _rot(axis: int, angle: float) -> np.ndarray:
+    """Right-hand turn about a coordinate axis (Rodrigues, no inserr rotation code)."""
+    e = np.zeros(3)
+    e[axis] = 1.0
+    return _rodrigues(e, np.array([angle]))[0]
+
+
+def test_isolation_angle_points_the_imu_y_axis_at_the_target_heading():
+    # Random tilted vehicle attitudes, inner angles, an off-axis mounting and targets: the
+    # returned outer angle a must put the IMU y axis, C_b^n rot_z(a) rot_x(b) C_s^t e_y,
+    # at the target heading (clockwise from north) with a positive horizontal projection.
+    from inserr.schemes.turntable import imu_heading_offset, isolation_angle
+
+    rng = np.random.default_rng(7)
+    mounting = _rot(0, 0.02) @ _rot(1, -0.03) @ _rot(2, 0.05)
+    for mount in (None, mounting):
+        m = np.eye(3) if mount is None else mount
+        c_bn = np.array(
+            [
+                _rot(2, rng.uniform(-3, 3))
+                @ _rot(0, rng.normal(0, 0.05))
+                @ _rot(1, rng.normal(0, 0.05))
+                for _ in range(6)
+            ]
+        )
+        b = rng.choice([0.0, math.pi], size=6) + rng.normal(0, 0.01, size=6)
+        target = rng.uniform(-math.pi, math.pi, size=6)
+        a = isolation_angle(c_bn, b, mount, target)
+        for k in range(6):
+            y_n = c_bn[k] @ _rot(2, a[k]) @ _rot(0, b[k]) @ m @ np.array([0.0, 1.0, 0.0])
+            heading = math.atan2(y_n[0], y_n[1])
+            # A closed-form root: roundoff only.
+            assert math.remainder(heading - target[k], 2 * math.pi) == pytest.approx(0.0, abs=1e-9)
+        # imu_heading_offset is the same geometry for a vehicle at heading 0.
+        tilt = _rot(0, 0.04) @ _rot(1, -0.02)
+        off = imu_heading_offset(tilt, a, b, mount)
+        for k in range(6):
+            y_n = tilt @ _rot(2, a[k]) @ _rot(0, b[k]) @ m @ np.array([0.0, 1.0, 0.0])
+            assert off[k] == pytest.approx(math.atan2(y_n[0], y_n[1]), abs=1e-12)
+
+
+def _rodrigues(w: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """expm(s [w x]) for every s, written out (Rodrigues), shape (len(s), 3, 3)."""
+    rate = np.linalg.norm(w)
+    if rate == 0.0:
+        return np.broadcast_to(np.eye(3), (len(s), 3, 3))
+    k = _skew(w / rate)
+    th = (rate * s)[:, None, None]
+    return np.eye(3) + np.sin(th) * k + (1 - np.cos(th)) * (k @ k)
+
+
+def _cycle_moments(tl, t0: float, t1: float, w_table_n):
+    """Numerical cycle integrals from the timeline, Gauss-Legendre per interval.
+
+    Returns (U(t1) - U(t0), mean over [t0, t1] of U(t) = int_0^t C dt, and the same two
+    for the rate terms C e_r (C^T w)_c of every unit error e_r e_c^T, w the table's rate).
+    """
+    x, wts = np.polynomial.legendre.leggauss(30)
+    u = np.zeros((3, 3))
+    u_rate = np.zeros((3, 3, 3))  # [:, r, c]: int C e_r (C^T w)_c dt
+    s_u = np.zeros((3, 3))
+    s_rate = np.zeros((3, 3, 3))
+    u_at_t0 = None
+    u_rate_at_t0 = None
+    for k, w in enumerate(tl.omega_n):
+        a, b = tl.times[k], min(tl.times[k + 1], t1)
+        if b <= a:
+            continue
+        h = b - a
+        s = 0.5 * h * (x + 1.0)
+        ws = 0.5 * h * wts
+        c = _rodrigues(w, s) @ tl.c_sn[k]
+        w_n = w_table_n(k)
+        ws_imu = np.einsum("jab,a->jb", c, w_n)  # C^T w, (J, 3)
+        rate = np.einsum("jar,jc->jarc", c, ws_imu)  # (J, 3, 3, 3)
+        if a >= t0:
+            if u_at_t0 is None:
+                u_at_t0, u_rate_at_t0 = u.copy(), u_rate.copy()
+            # int over the interval of U(t) = U(a) h + int_0^h (h - s) C(a + s) ds
+            s_u += u * h + np.einsum("j,jab->ab", ws * (h - s), c)
+            s_rate += u_rate * h + np.einsum("j,jarc->arc", ws * (h - s), rate)
+        u = u + np.einsum("j,jab->ab", ws, c)
+        u_rate = u_rate + np.einsum("j,jarc->arc", ws, rate)
+    cycle = t1 - t0
+    return u - u_at_t0, s_u / cycle, u_rate - u_rate_at_t0, s_rate / cycle
+
+
+@pytest.mark.parametrize("scheme", ["two-position", "four-position-modified", "quarter-turns"])
+def test_cycle_integrals_running_means_and_rate_terms_match_the_timeline(scheme):
+    """Every closed-form cycle quantity against quadrature of the timeline: the integral of
+    C_s^n, the cycle mean of its running integral from t = 0 (first stop included), and
+    the scale-factor and misalignment x table-rate integrals and their means."""
+    from inserr.core.imu import MISALIGNMENT_INDEX, MISALIGNMENTS
+
+    motion = TILTED
+    s = _scheme(scheme, 30.0)
+    t0, t1 = s.first_dwell, s.first_dwell + s.cycle_time
+    tl = build_timeline(s.plan(motion, t1), motion, t1)
+
+    def w_table_n(k):  # the table's own rate resolved in n (Earth rate excluded)
+        return tl.omega_n[k]  # static base: the IMU's rate relative to n is the table's
+
+    u, mean_u, u_rate, mean_rate = _cycle_moments(tl, t0, t1, w_table_n)
+    ci = cycle_integrals(s, motion)
+    # 30-point Gauss-Legendre on intervals of at most half a turn: ~1e-13 relative; the
+    # quantities reach ~1e3 s (U) and ~1 rad (rate terms).
+    assert np.allclose(ci.full, u, rtol=0, atol=1e-8)
+    assert np.allclose(ci.mean_excursion, mean_u, rtol=0, atol=1e-8)
+    sf = np.stack([u_rate[:, i, i] for i in range(3)], axis=1)
+    mis = np.stack([u_rate[:, r, c] for r, c in (MISALIGNMENT_INDEX[n] for n in MISALIGNMENTS)], 1)
+    assert np.allclose(ci.scale_factor, sf, rtol=0, atol=1e-10)
+    assert np.allclose(ci.misalignment, mis, rtol=0, atol=1e-10)
+    sf_mean = np.stack([mean_rate[:, i, i] for i in range(3)], axis=1)
+    mis_mean = np.stack(
+        [mean_rate[:, r, c] for r, c in (MISALIGNMENT_INDEX[n] for n in MISALIGNMENTS)], 1
+    )
+    assert np.allclose(ci.mean_excursion_scale_factor, sf_mean, rtol=0, atol=1e-10)
+    assert np.allclose(ci.mean_excursion_misalignment, mis_mean, rtol=0, atol=1e-10)
+
+
+@pytest.mark.parametrize(
+    "scheme, options, starts",
+    [
+        # A start is a turn after a stop or a reversal (docs/schemes.md).
+        ("two-position", {}, 4),
+        ("four-position", {}, 4),
+        ("eight-position", {}, 8),
+        ("continuous", {}, 0),  # one endless turn: started once, before the cycle
+        ("continuous", {"reversal": 120.0}, 2),
+    ],
+)
+def test_motor_starts_per_cycle(scheme, options, starts):
+    s = build_scheme(scheme, 6 * DEG, 30.0, **options)
+    assert cycle_integrals(s).motor_starts == starts
+    assert cycle_integrals(s).motor_starts_per_hour == pytest.approx(
+        starts * 3600.0 / s.cycle_time, rel=1e-12
+    )
