@@ -775,3 +775,45 @@ def test_every_range_is_documented():
     section = text.split("## Ranges", 1)[1].split("\n## ", 1)[0]
     for key in [*RANGES, *NUMBER_RANGES]:
         assert f"| `{key}` |" in section, key
+
+
+@pytest.fixture
+def read_only_dir(tmp_path):
+    """An empty directory on a read-only bind mount (root ignores permission bits, not
+    a read-only mount); skipped where mounting is not allowed."""
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    if os.geteuid() != 0:
+        ro.chmod(0o500)
+        yield ro
+        ro.chmod(0o700)
+        return
+    try:
+        subprocess.run(["mount", "--bind", str(ro), str(ro)], check=True, capture_output=True)
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip("cannot bind-mount here")
+    try:
+        subprocess.run(["mount", "-o", "remount,bind,ro", str(ro)], check=True, capture_output=True)
+        yield ro
+    finally:
+        subprocess.run(["umount", str(ro)], check=False, capture_output=True)
+
+
+@pytest.mark.parametrize("where", ["itself", "inside"])
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_unwritable_out_is_refused_before_any_work(
+    command, where, read_only_dir, ok_scenario, monkeypatch
+):
+    """Issue 14: run did all the work, then PermissionError/EBUSY; sweep gave EROFS."""
+    import inserr.drift.study as study
+
+    calls = []
+    monkeypatch.setattr(study, "analyze_drift", lambda *a, **k: calls.append(1))
+    out = read_only_dir if where == "itself" else read_only_dir / "new"
+    argv = [command, str(ok_scenario), "--out", str(out)]
+    if command == "sweep":
+        argv += ["--param", "stop=60,300", "--scheme", "two-position", "--workers", "1"]
+    rc, _, err = run_cli(argv)
+    assert_one_clear_line(rc, err, command)
+    assert "cannot write" in err or "mount point" in err, err
+    assert calls == [] and list(read_only_dir.iterdir()) == []
