@@ -497,8 +497,10 @@ def test_killing_a_sweep_takes_its_workers_with_it(tmp_path):
 
 
 def _api(case: str):
+    from inserr.core.earth import Site
+    from inserr.core.imu import ImuErrors
     from inserr.drift.study import run_scheme
-    from inserr.scenario.schema import scenario_from_dict
+    from inserr.scenario.schema import load_scenario, scenario_from_dict
 
     ok = scenario_from_dict({"scenario": {"duration": "1 h"}, "output": {"step": "60 s"}})
     return {
@@ -514,12 +516,32 @@ def _api(case: str):
         "blank scheme name": lambda: run_scheme(ok, "  "),
         "unknown scheme name": lambda: run_scheme(ok, "bogus"),
         "scheme name a number": lambda: run_scheme(ok, 5),
+        "Site latitude a string": lambda: Site("34", 0.0, 0.0),
+        "Site latitude None": lambda: Site(None, 0.0, 0.0),
+        "Site height a list": lambda: Site(0.5, 0.0, [1.0]),
+        "ImuErrors gyro_bias a string": lambda: ImuErrors(gyro_bias="0.01"),
+        "ImuErrors gyro_bias None": lambda: ImuErrors(gyro_bias=None),
+        "ImuErrors gyro_bias strings": lambda: ImuErrors(gyro_bias=["1", "2", "3"]),
+        "ImuErrors gyro_bias four values": lambda: ImuErrors(gyro_bias=[1e-6] * 4),
+        "scenario_from_dict None": lambda: scenario_from_dict(None),
+        "scenario_from_dict a list": lambda: scenario_from_dict([1]),
+        "load_scenario None": lambda: load_scenario(None),
         "scenario None": lambda: run_scheme(None),
         "scenario a string": lambda: run_scheme("ok.toml"),
     }[case]
 
 
 API_BAD = [
+    "Site latitude a string",
+    "Site latitude None",
+    "Site height a list",
+    "ImuErrors gyro_bias a string",
+    "ImuErrors gyro_bias None",
+    "ImuErrors gyro_bias strings",
+    "ImuErrors gyro_bias four values",
+    "scenario_from_dict None",
+    "scenario_from_dict a list",
+    "load_scenario None",
     "gyro_bias None",
     "gyro_bias list of numbers",
     "latitude a list",

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import copy
 import math
+import os
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -600,6 +601,8 @@ def read_scenario_file(path: str | Path) -> tuple[dict, Path]:
     InputError
         Missing file, not UTF-8, malformed TOML.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path: expected a scenario file path, got {type(path).__name__}")
     p = Path(path)
     if p.is_dir():
         raise InputError(str(path), "is a directory, not a scenario file", "name a .toml file")
@@ -676,6 +679,8 @@ def scenario_from_dict(
     Scenario
         Every key validated; :meth:`Scenario.value` gives any of them in SI.
     """
+    if not isinstance(data, Mapping):
+        raise TypeError(f"data: expected a dict of scenario sections, got {type(data).__name__}")
     if study not in STUDY_DEFAULTS:  # a programming error, not bad input
         raise ValueError(f"unknown study {study!r}; use one of {', '.join(STUDY_DEFAULTS)}")
     raw: dict[str, dict[str, Any]] = {}
