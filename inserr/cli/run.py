@@ -25,7 +25,7 @@ def run(args: argparse.Namespace) -> int:
     out = args.out
     if out is None:  # a given --out was checked by the CLI entry point already
         out = f"{Path(args.scenario).stem}_report"
-        check_report_dir(out)
+        check_report_dir(out, inputs=[args.scenario])
     names = (scen.scheme_name,) + tuple(n for n in scen.compare if n != scen.scheme_name)
     runs = [run_scheme(scen, n) for n in progress(names, total=len(names), desc="schemes")]
     path = build_report(scen, runs, source=args.scenario).write(out)

@@ -7,6 +7,8 @@ The package is callable: ``inserr.drift(scenario, "two-position")`` runs
   (:func:`~inserr.drift.analysis.analyze_drift`).
 * ``unknown_signs`` — RMS and exact worst case over the signs of the constant errors.
 * ``study`` — a scenario run under a scheme (:func:`~inserr.drift.study.run_scheme`), tables.
+* ``validity`` — where a result can be trusted: finiteness, the free vertical channel,
+  the linear model's range, Schuler resonance of the indexing cycle.
 * ``figures`` — horizontal error, attitude, error budget and table-angle figures.
 * ``report`` — the drift report, for the one writer.
 * ``budget`` — readable source names and the rows every budget table and figure shows.

@@ -18,6 +18,12 @@ from inserr.core.errors import InputError
 from inserr.core.units import ARCMIN, ARCSEC, DEG, HOUR, MICRO_G, NMI, PPM
 from inserr.drift.analysis import DriftResult, analyze_drift
 from inserr.drift.budget import BUDGET_COLUMN, budget_rows
+from inserr.drift.validity import (
+    check_finite,
+    check_vertical,
+    linear_validity_warnings,
+    near_schuler_resonance,
+)
 from inserr.model.timeline import Timeline
 from inserr.output.results import StudyResult, budget_frame
 from inserr.scenario.schema import Scenario
@@ -50,6 +56,9 @@ class SchemeRun(StudyResult):
         Sub-step used when a piecewise-constant-rate :attr:`timeline` is asked for.
     scenario : Scenario, optional
         The scenario it ran (the export step of :meth:`to_dataframe`, the summary).
+    validity : tuple of str
+        Warnings of :mod:`inserr.drift.validity` (free vertical channel, linear model
+        out of range); :meth:`metrics` lists them under ``warnings``.
     """
 
     name: str
@@ -58,6 +67,7 @@ class SchemeRun(StudyResult):
     site: Site
     substep: float = 1.0
     scenario: Scenario | None = None
+    validity: tuple[str, ...] = ()
 
     @property
     def title(self) -> str:  # type: ignore[override]
@@ -94,13 +104,14 @@ class SchemeRun(StudyResult):
             m["cycle_time_s"] = table.cycle
             ratio = table.cycle / self.schuler_period_s
             m["cycle_to_schuler_ratio"] = ratio
-            k = max(1, round(ratio))
-            if abs(ratio - k) < 0.15 * k:
+            k = near_schuler_resonance(table.cycle, self.schuler_period_s, self.history.duration)
+            if k is not None:
                 m["warnings"].append(
                     f"cycle {table.cycle:.0f} s is close to {k} x the Schuler period "
                     f"({self.schuler_period_s:.0f} s): forcing at the cycle frequency excites the "
                     "Schuler loop near resonance; shorten the stops or change the cycle"
                 )
+        m["warnings"].extend(self.validity)
         return m
 
     @property
@@ -305,7 +316,18 @@ def budget_csv(runs: list[SchemeRun]) -> str:
 
 def run_scheme(scen: Scenario, name: str | None = None) -> SchemeRun:
     """Drift analysis of ``scen`` under its scheme (or ``name``)."""
-    name = name or scen.scheme_name
+    if not isinstance(scen, Scenario):
+        raise TypeError(
+            f"scen: expected a Scenario (load_scenario or scenario_from_dict), "
+            f"got {type(scen).__name__}"
+        )
+    if name is None:
+        name = scen.scheme_name
+    elif not isinstance(name, str):
+        raise TypeError(f"scheme.name: expected a scheme name (str), got {type(name).__name__}")
+    elif not name.strip():
+        raise InputError("scheme.name", "empty scheme name", "give a scheme name or None")
+    vertical_warnings = check_vertical(scen.site, scen.duration, scen.vertical)
     hist = scen.history(name)
     res = analyze_drift(
         scen.site,
@@ -318,7 +340,9 @@ def run_scheme(scen: Scenario, name: str | None = None) -> SchemeRun:
         engine=scen.engine,
         substep=scen.substep,
     )
-    return SchemeRun(name, hist, res, scen.site, scen.substep, scen)
+    check_finite(res, name)
+    warnings = (*vertical_warnings, *linear_validity_warnings(res, scen.site))
+    return SchemeRun(name, hist, res, scen.site, scen.substep, scen, warnings)
 
 
 def describe(scen: Scenario) -> list[tuple[str, str]]:

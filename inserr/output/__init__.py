@@ -2,7 +2,9 @@
 
 * ``report`` — :class:`~inserr.output.report.Report` and its writer (``report.md``,
   ``report.html``, PNGs, ``results.json``; atomic, never over a user's directory);
-  strict JSON and atomic file writers.
+  strict JSON.
+* ``outdir`` — output directories that cannot hurt anyone: ownership manifests, write
+  probes, atomic file writes, leftovers of killed runs.
 * ``figure_style`` — sizes, resolution, fonts, grid and a colour per scheme; figures on
   :class:`matplotlib.figure.Figure`, never pyplot.
 * ``progress`` — progress bars on a terminal, silent otherwise.
@@ -16,10 +18,10 @@ __getattr__, __dir__ = lazy_exports(
     __name__,
     {
         "Report": "inserr.output.report",
-        "check_output_dir": "inserr.output.report",
+        "check_output_dir": "inserr.output.outdir",
         "check_report_dir": "inserr.output.report",
         "dumps": "inserr.output.report",
-        "write_bytes_atomic": "inserr.output.report",
+        "write_bytes_atomic": "inserr.output.outdir",
         "write_text_atomic": "inserr.output.report",
         "progress": "inserr.output.progress",
         "set_quiet": "inserr.output.progress",
