@@ -239,14 +239,15 @@ class LocalEngine:
             kwargs["initializer"] = partial(exit_with_parent, os.getpid())
         with sink, _one_blas_thread_per_process(self.scheduler == "processes"):
             if self.keep_pool:
-                kwargs["pool"] = self._kept_pool()
+                # The kept pool was made with the same initializer (Dask ignores it here).
+                kwargs["pool"] = self._kept_pool(kwargs.pop("initializer"))
             dask.compute(*delayed, **kwargs)
 
-    def _kept_pool(self):
-        """The worker processes kept across runs (made as Dask makes its own pools)."""
+    def _kept_pool(self, initializer):
+        """The worker processes kept across runs (made as Dask makes its own pools, with
+        ``initializer`` run in each: the workers end with their parent)."""
         if self._pool is None:
             from concurrent.futures import ProcessPoolExecutor
-            from functools import partial
 
             from dask.multiprocessing import get_context, initialize_worker_process
 
@@ -256,7 +257,7 @@ class LocalEngine:
             self._pool = ProcessPoolExecutor(
                 self.workers,
                 mp_context=get_context(),
-                initializer=partial(initialize_worker_process, user_initializer=None),
+                initializer=partial(initialize_worker_process, user_initializer=initializer),
             )
         return self._pool
 
