@@ -28,13 +28,14 @@ the P0 design's report, the verdicts of issue 17 and the static-base design.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
 from inserr.design import figures
 from inserr.design.study import DesignOutcome, build_report, run_design
 from inserr.output.report import write_text_atomic
-from inserr.scenario.schema import load_scenario
+from inserr.scenario.schema import Scenario, load_scenario, scenario_from_dict
 
 HERE = Path(__file__).resolve().parent
 QUICK = {
@@ -47,13 +48,23 @@ QUICK = {
     "design.verify": 3,
     "design.screen_duration": "6 h",
 }
-STATIC = {"motion.type": "static", "design.motions": "scenario", "design.held_out": 0}
+STATIC = {"design.motions": "scenario", "design.held_out": 0}
 #: The closed-loop design: three variables, so a smaller budget than the open-loop one.
 NULLING = {
     "design.family": "nulling",
     "design.extension_range": "1200, 2400 s",
     "design.budget": 120,
 }
+
+
+def at_rest(scen: Scenario) -> Scenario:
+    """The same vehicle at rest: a static motion at its heading, pitch and roll (the
+    swing's amplitude and period dropped, as a static motion reads neither)."""
+    raw = json.loads(json.dumps(scen.raw))
+    raw["motion"] = {
+        k: v for k, v in raw["motion"].items() if k in ("heading", "pitch", "roll")
+    } | {"type": "static"}
+    return scenario_from_dict(raw, scen.base_dir)
 
 
 def verdicts(o: DesignOutcome) -> list[str]:
@@ -158,7 +169,7 @@ def main(argv: list[str] | None = None) -> int:
     nul_scen = scen.with_changes(QUICK | NULLING if args.quick else NULLING)
     nul = run_design(nul_scen, out_dir=out / "nulling", markdown_name="REPORT.md", **engine)
     print(f"closed-loop rule: chosen {nul.results['chosen']['label']}", file=sys.stderr)
-    static_scen = scen.with_changes(STATIC)
+    static_scen = at_rest(scen).with_changes(STATIC)
     static = run_design(static_scen, out_dir=out / "static", markdown_name="REPORT.md", **engine)
     print(f"static base: chosen {static.results['chosen']['label']}", file=sys.stderr)
 
