@@ -25,7 +25,7 @@ def run(args: argparse.Namespace) -> int:
         build_report(scen, [r]).write(args.out)
     budget = list(m["error_budget"].items())[:8]
     human = (
-        f"scheme {m['scheme']}, {m['hours']:g} h, {scen.motion.describe()}\n"
+        f"scheme {m['scheme']}, {m['hours']:g} h, {scen.motion.describe(scen.heading_convention)}\n"
         + format_table(
             ["metric", "value"],
             [
