@@ -462,3 +462,92 @@ def comparison_table(
         for label, r in rows.items()
     ]
     return header, body
+
+
+def drift_summary(run: SchemeRun, top: int = 6) -> dict:
+    """Headline horizontal and heading figures of one run (nmi, arcmin).
+
+    Returns
+    -------
+    dict
+        ``scheme``; ``max_horizontal_nmi``, ``final_horizontal_nmi`` (every error as
+        given), ``rms_unknown_signs_nmi``, ``worst_signs_nmi`` (maxima over the run);
+        ``max_abs_heading_error_arcmin``, ``final_heading_error_arcmin``;
+        ``motor_starts_per_hour``; the ``top`` largest sources at the end:
+        ``horizontal_budget_nmi`` and ``heading_budget_arcmin`` (``|heading error|``).
+    """
+    from inserr.core.units import ARCMIN
+
+    m = run.metrics()
+    res = run.result
+    heading = {
+        s.name: abs(float(res.source_heading[-1, j])) / ARCMIN for j, s in enumerate(res.sources)
+    }
+    return {
+        "scheme": run.name,
+        "max_horizontal_nmi": m["max_horizontal_error_nmi"],
+        "final_horizontal_nmi": m["final_horizontal_error_nmi"],
+        "rms_unknown_signs_nmi": m["rms_horizontal_error_nmi"],
+        "worst_signs_nmi": m["worst_case_horizontal_error_nmi"],
+        "max_abs_heading_error_arcmin": float(np.abs(res.attitude[:, 2]).max() / ARCMIN),
+        "final_heading_error_arcmin": float(res.attitude[-1, 2] / ARCMIN),
+        "motor_starts_per_hour": m["motor_starts_per_hour"],
+        "horizontal_budget_nmi": dict(list(m["error_budget"].items())[:top]),
+        "heading_budget_arcmin": dict(sorted(heading.items(), key=lambda kv: -kv[1])[:top]),
+    }
+
+
+def cycle_summary(scen: Scenario, names: Iterable[str]) -> dict:
+    """Closed-form cycle integrals of periodic schemes on the scenario's (static) motion.
+
+    Returns
+    -------
+    dict
+        Per scheme name: ``cycle_time_s``; ``horizontal_cycle_integral_s`` (2x2, the
+        horizontal projection of IMU x, y integrated over one cycle, s), its ``stops``
+        and ``turns`` parts; ``residual_drift_fraction`` (of a horizontal bias) and the
+        ``equivalent_horizontal_drift_deg_h`` of the scenario's largest horizontal gyro
+        bias; ``up_axis_cycle_integral_s`` (the up gyro's: the whole cycle, unmodulated);
+        ``motor_starts_per_hour``.
+    """
+    from inserr.core.units import DEG_PER_HOUR
+    from inserr.schemes.cycle_integrals import cycle_integrals
+
+    out = {}
+    bias = float(np.max(np.abs(scen.imu.gyro_bias[:2])))
+    for name in names:
+        ci = cycle_integrals(scen.scheme(name), scen.motion)
+        out[name] = {
+            "cycle_time_s": ci.cycle_time,
+            "horizontal_cycle_integral_s": ci.horizontal,
+            "stops_horizontal_s": ci.stops[:2, :2],
+            "turns_horizontal_s": ci.turns[:2, :2],
+            "residual_drift_fraction": ci.residual_drift_fraction,
+            "equivalent_horizontal_drift_deg_h": ci.residual_drift_fraction * bias / DEG_PER_HOUR,
+            "up_axis_cycle_integral_s": ci.full[2, 2],
+            "motor_starts_per_hour": ci.motor_starts_per_hour,
+        }
+    return out
+
+
+def heading_figure(panels: dict[str, dict[str, SchemeRun]]):
+    """Heading error against time, one panel per title: ``{title: {label: run}}`` (arcmin).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from inserr.core.units import ARCMIN
+    from inserr.output import figure_style as style
+
+    fig, axes = style.subplots(len(panels), 1, height=3.0 * len(panels), sharex=True)
+    for ax, (title, runs) in zip(np.atleast_1d(axes), panels.items(), strict=True):
+        for i, (label, run) in enumerate(runs.items()):
+            r = run.result
+            color = style.scheme_color(label, i)
+            ax.plot(r.t / 3600.0, r.attitude[:, 2] / ARCMIN, color=color, lw=1.0, label=label)
+        ax.set(ylabel="heading error (arcmin)", title=title)
+        style.grid(ax)
+        ax.legend()
+    np.atleast_1d(axes)[-1].set_xlabel("time (h)")
+    return style.finish(fig)
