@@ -4,6 +4,8 @@
   (:func:`~inserr.drift.analysis.analyze_drift`).
 * ``unknown_signs`` — RMS and exact worst case over the signs of the constant errors.
 * ``study`` — a scenario run under a scheme (:func:`~inserr.drift.study.run_scheme`), tables.
+* ``comparison`` — schemes compared on one scenario: figures per error set, motion grids.
+* ``paper`` — a paper's published figures beside the model's: readings, sign ranges, claims.
 * ``figures`` — horizontal error, attitude, error budget and table-angle figures.
 * ``report`` — the drift report, for the one writer.
 """
