@@ -292,8 +292,16 @@ def paper_section(
             for c in claims
         ],
     )
+    held = {a: sum(c[a] for c in claims) for a in answers}
+    top = sorted(held, key=held.get, reverse=True)
+    support = (
+        f"the model's results support the {top[0]} reading"
+        if held[top[0]] > held[top[1]]
+        else "the claims do not tell the readings apart"
+    )
     rep.paragraph(
         f"Of {len(claims)} claims, "
-        + ", ".join(f"{sum(c[a] for c in claims)} hold read {a}" for a in answers)
-        + "; a 'no' in the last column is a verdict that does not depend on the reading."
+        + ", ".join(f"{held[a]} hold read {a}" for a in answers)
+        + f": {support}. A 'no' in the last column is a verdict that does not depend on the "
+        "reading."
     )
