@@ -153,6 +153,11 @@ def main(argv: list[str] | None = None) -> int:
     files, failed = {}, []
     if args.report:
         files = {c: f for c in todo if (f := cache_file(*c, hours, args.rate)).is_file()}
+        failed = [
+            {"scenario_file": c[0].name, "scheme": c[1], "status": "not run (no cached result)"}
+            for c in todo
+            if c not in files
+        ]
     else:
         with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
             futures = {pool.submit(run_case, *c, hours, args.rate): c for c in todo}

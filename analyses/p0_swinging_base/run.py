@@ -3,7 +3,7 @@
 Reads ``scenario.toml`` (experiment 1, yaw period 120 s) and ``scenario_exp2.toml``
 (experiment 2, 60 s) and writes ``results/`` (figures, ``results.json``, ``REPORT.md``;
 every number in the write-up is taken from the results). The nonlinear reference
-(``nonlinear.py``) writes ``results/nonlinear.json``, quoted here when it exists. The
+(``nonlinear.py``) writes its own ``results/NONLINEAR.md`` and ``nonlinear.json``. The
 study logic is in :mod:`inserr.drift.comparison` and :mod:`inserr.drift.paper`.
 
     python analyses/p0_swinging_base/run.py [--quick] [--jobs N] [--heading-convention C]
@@ -16,7 +16,6 @@ paper always runs both).
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
@@ -114,7 +113,7 @@ def against_the_paper(scens: dict) -> dict:
     return {"comparisons": comps, "claims": check_claims(tests, list(SHORT.values()))}
 
 
-def build_report(scens, rows, runs, diag, sweep, nonlinear, atp) -> Report:
+def build_report(scens, rows, runs, diag, sweep, atp) -> Report:
     s1 = scens["exp1"]
     declared = s1.heading_convention
     rep = Report("P0 reproduction: indexing on a swinging base")
@@ -223,14 +222,10 @@ def build_report(scens, rows, runs, diag, sweep, nonlinear, atp) -> Report:
     )
     rep.heading("Linear vs nonlinear")
     rep.paragraph(
-        f"Over the {nonlinear.get('cases')} cases of `results/nonlinear.json` (read "
-        f"{SHORT.get(nonlinear.get('convention'), 'clockwise')}) the largest relative "
-        "difference of the maximum horizontal error is "
-        f"{nonlinear.get('max_relative_difference', 0):.1e}: the ranking is no artefact of the "
-        "linear model. The reference shares the reading of P0's set-up, so it validates "
-        "the linearization, not the reading (`NONLINEAR.md`)."
-        if nonlinear
-        else "Not available: run `nonlinear.py` (P0's inverse-navigation reference), then this."
+        "`nonlinear.py` runs the same scenario files through P0's kind of reference (inverse "
+        "navigation, python-ins strapdown navigation at 100 Hz) and writes `NONLINEAR.md` and "
+        "`nonlinear.json` (its own run, read with the convention they record). The reference "
+        "shares the reading of P0's set-up, so it validates the linearization, not the reading."
     )
     rep.paragraph(
         "Run time, experiment 1 (s, this machine): "
@@ -245,7 +240,6 @@ def build_report(scens, rows, runs, diag, sweep, nonlinear, atp) -> Report:
         "sweep_verdict": verdicts,
         "sweep_verdict_other_convention": other,
         "against_the_paper": atp,
-        "nonlinear": nonlinear,
     }
     return rep
 
@@ -307,17 +301,7 @@ def main(argv: list[str] | None = None) -> int:
         {"heading_convention": other, **ratio_verdict(other_points, TRADITIONAL)},
     )
     atp = against_the_paper(scens)
-    try:
-        nl = json.loads((HERE / "results" / "nonlinear.json").read_text(encoding="utf-8"))
-        rel = [c["relative_difference"] for c in nl["cases"] if "relative_difference" in c]
-        nonlinear = {
-            "cases": len(rel),
-            "convention": nl.get("heading_convention"),
-            "max_relative_difference": max(rel),
-        }
-    except (OSError, ValueError, KeyError):
-        nonlinear = {}
-    rep = build_report(scens, rows, runs, diag, sweep, nonlinear, atp)
+    rep = build_report(scens, rows, runs, diag, sweep, atp)
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(
         out / "sweep.json", dumps({"points": points, "other_convention": other_points})
