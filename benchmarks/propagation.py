@@ -108,7 +108,7 @@ def peak_memory_mb(hours: float, scheme: str) -> float:
     """Peak resident memory (MB) of ``inserr drift`` on P0's swinging base, own process."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     cmd = [
-        sys.executable, "-m", "inserr.cli.main", "drift", str(P0), "--hours", f"{hours:g}",
+        sys.executable, "-m", "inserr.cli.main", "drift", str(P0), "--duration", f"{hours:g}h",
         "--scheme", scheme, "--step", "1", "--covariance-step", "60", "--json",
     ]  # fmt: skip
     env = {**os.environ, "PYTHONPATH": str(ROOT)}

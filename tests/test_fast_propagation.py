@@ -261,31 +261,39 @@ def test_free_vertical_channel_agrees_over_a_short_run():
 def test_exact_engine_converges_to_the_fast_one_as_its_substep_shrinks(scheme):
     dur = 1800.0
     hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, dur), SWING, dur)
-    fast = analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0).nav
-    errs = []
-    navs = []
-    for h in (1.0, 0.5):
-        ex = analyze_drift(
-            SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0, engine="exact", substep=h
-        ).nav
-        navs.append(ex)
-        errs.append(_relative(ex, fast))
-    # Second order: halving h divides the error by 4 (3 to 5 allowed: the error is not
-    # exactly h^2 where stops end between sub-step nodes).
-    assert 3.0 < errs[0] / errs[1] < 5.0
-    richardson = navs[1] + (navs[1] - navs[0]) / 3.0
-    assert _relative(richardson, fast) < errs[1] / 20.0
+    fast = analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0)
+    n = len(fast.t_cov)
+
+    def views(r):  # signed response (fine grid) and per-source responses (coarse grid)
+        return r.nav, r.source_horizontal.reshape(n, -1)
+
+    runs = [
+        views(analyze_drift(SITE, IMU, INIT, hist, dt_out=10.0, dt_cov=60.0, engine="exact",
+                            substep=h))
+        for h in (1.0, 0.5)
+    ]  # fmt: skip
+    for which, ref in enumerate(views(fast)):
+        errs = [_relative(r[which], ref) for r in runs]
+        # Second order: halving h divides the error by 4 (3 to 5 allowed: the error is
+        # not exactly h^2 where stops end between sub-step nodes).
+        assert 3.0 < errs[0] / errs[1] < 5.0
+        richardson = runs[1][which] + (runs[1][which] - runs[0][which]) / 3.0
+        assert _relative(richardson, ref) < errs[1] / 20.0
 
 
-@pytest.mark.parametrize("dt_out", [1.0, 7.0])
-def test_phase_cache_equals_direct_sampling(dt_out):
+@pytest.mark.parametrize(
+    ("scheme", "dt_out"),
+    [("nulling-two-position", 1.0), ("nulling-two-position", 7.0), ("four-position", 1.0),
+     ("flexible-two-position", 1.0)],
+)  # fmt: skip
+def test_phase_cache_equals_direct_sampling(scheme, dt_out):
     # Stops on a periodic vehicle reuse the vehicle part per phase; forbidding that
     # (no phase step) must change nothing but round-off. A 7 s output step does not
     # divide the 20 s phase step: fine times then fall anywhere in the cached windows.
+    # Four-position and the flexible rule stop at table angles whose matrices are not
+    # symmetric (a transposed table would show), nulling at 0 and 180 deg.
     dur = 3600.0
-    hist = ScheduleHistory(
-        build_scheme("nulling-two-position", 6 * DEG, 300.0).plan(SWING, dur), SWING, dur
-    )
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, dur), SWING, dur)
     model = ErrorModel(SITE, Layout(scale_misalignment=True))
     from inserr.model.error_sources import constant_sources, source_set
 
@@ -438,7 +446,8 @@ def test_gauss_markov_stationary_limit_equals_white_noise():
     [(Motion(heading=0.3, pitch=0.02, roll=-0.03), "sixteen-position"),
      (Motion(), "continuous"),
      (SWING, "two-position"),
-     (SWING, "none")],
+     (SWING, "none"),
+     (Motion(), "four-position")],
 )  # fmt: skip
 def test_periodic_lifting_equals_the_whole_run(monkeypatch, motion, scheme):
     # A periodic history (open-loop table on a static or periodic vehicle) is computed
@@ -446,6 +455,12 @@ def test_periodic_lifting_equals_the_whole_run(monkeypatch, motion, scheme):
     dur = 6 * 3600.0
     hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 120.0).plan(motion, dur), motion, dur)
     assert hist.period() is not None
+    # The lifting period is a whole number of the history's periods that both output
+    # grids divide (four-position: a 570 s cycle lifts with 1140 s on the 60 s grid).
+    lift = fp._lifting(hist, output_grid(dur, 1.0), output_grid(dur, 60.0))
+    assert lift is not None
+    ratio = lift[1] / hist.period()[1]
+    assert abs(ratio - round(ratio)) < 1e-9 and abs(lift[1] / 60.0 - round(lift[1] / 60.0)) < 1e-9
     lifted = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
     monkeypatch.setattr(fp, "_lifting", lambda *a: None)
     whole = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)

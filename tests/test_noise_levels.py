@@ -215,14 +215,21 @@ def test_alignment_simulated_noise_matches_the_filter_noise_model(vrw, zupt_sigm
     assert chi2.ppf(0.001, dof) < total < chi2.ppf(0.999, dof)
 
 
-def test_gyro_bias_instability_gives_the_stationary_gm_integral_in_the_north_tilt():
+@pytest.mark.parametrize("engine", ["fast", "exact"])
+def test_gyro_bias_instability_gives_the_stationary_gm_integral_in_the_north_tilt(engine):
     # psi_N = -int b_N exactly at the equator; b starts stationary (variance sigma^2), so
     # Var psi_N = 2 sigma^2 tau^2 (t/tau - 1 + e^(-t/tau)). Started at zero instead, or
-    # driven with sigma^2 / tau, the variance would differ by O(1) at t ~ tau.
+    # driven with sigma^2 / tau, the variance would differ by O(1) at t ~ tau. Both
+    # engines: the fast one's closed form and the step engine's augmented GM states.
     sigma, tau = 0.01 * DEG_PER_HOUR, 1200.0
     imu = ImuErrors(gyro_bias_instability=sigma, gyro_correlation_time=tau)
     res = analyze_drift(
-        Site(0.0), imu, InitialErrors(), Timeline.static(np.eye(3), 4 * 3600.0), dt_cov=300.0
+        Site(0.0),
+        imu,
+        InitialErrors(),
+        Timeline.static(np.eye(3), 4 * 3600.0),
+        dt_cov=300.0,
+        engine=engine,
     )
     p = res.noise_cov["gyro_bias_instability"]
     t = res.t_cov
@@ -410,3 +417,19 @@ def test_covariance_outputs_that_start_after_zero_are_the_same_numbers():
     # Same steps, same products: identical to roundoff.
     assert np.allclose(late, full[1:], rtol=1e-12, atol=0)
     assert late[0, 0, 0] > 0
+
+
+def test_alignment_truth_noise_factor_is_a_square_root_of_qd():
+    # The simulated truth of the alignment filter draws its process noise as L n with
+    # n ~ N(0, I): its covariance is L L^T, which must be the filter's own Qd (a
+    # variance where a sigma belongs would shrink the simulated noise by orders of
+    # magnitude). Qd here is the real one of a static IMU with ARW and VRW, singular in
+    # its position and bias rows. L L^T = Qd to roundoff of the eigendecomposition.
+    from inserr.alignment.filter import _noise_factor
+
+    model = ErrorModel(Site.from_degrees(34.0), Layout(bias=True))
+    arw, vrw = 0.002 * DEG_PER_SQRT_HOUR, 20 * MICRO_G * math.sqrt(1.0)  # m/s/sqrt(s)
+    qd = Discretizer(model, model.noise_intensity(arw, vrw)).noise(np.zeros(3), 1.0)
+    lf = _noise_factor(qd)
+    assert np.linalg.matrix_rank(qd, tol=1e-6 * np.abs(qd).max()) < len(qd)  # singular
+    assert np.allclose(lf @ lf.T, qd, rtol=0, atol=1e-10 * np.abs(qd).max())

@@ -64,6 +64,7 @@ COPY = ("inserr", "tests", "docs", "pyproject.toml", "mkdocs.yml", "README.md")
 PHYSICS_TESTS = (
     "tests/test_unknown_signs.py",
     "tests/test_frames.py",
+    "tests/test_fast_propagation.py",
     "tests/test_noise_levels.py",
     "tests/test_scheme_timelines.py",
     "tests/test_scheme_tables.py",
@@ -333,8 +334,8 @@ QUICK: tuple[Mutation, ...] = (
         "worst case tries signs {0, 1} instead of {-1, +1}",
         (
             SIGNS,
-            's0 = np.where(np.einsum("tnd,td->tn", vv, u0) >= 0, 1.0, -1.0)',
-            's0 = np.where(np.einsum("tnd,td->tn", vv, u0) >= 0, 1.0, 0.0)',
+            "(vv[..., 0] == 0) & (vv[..., 1] >= 0)), 1.0, -1.0)",
+            "(vv[..., 0] == 0) & (vv[..., 1] >= 0)), 1.0, 0.0)",
         ),
     ),
     # --- the fast engine (inserr.model.fast_propagation, analyze_drift's default) -------

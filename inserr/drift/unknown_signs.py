@@ -70,30 +70,28 @@ def worst_case_norm(vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _walk(vv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`worst_case_norm` of (T, N, 2) vectors (N >= 1)."""
-    ang = np.arctan2(vv[..., 1], vv[..., 0])  # (T, N)
-    two_pi = 2.0 * np.pi
-    # Crossing ang_i + pi/2 turns v_i . u from positive to negative (the vertex loses
-    # 2 v_i); crossing ang_i - pi/2 does the opposite. Walk the 2N crossings in order.
-    crit = np.concatenate([ang + 0.5 * np.pi, ang - 0.5 * np.pi], axis=-1) % two_pi
-    step = np.concatenate([-2.0 * vv, 2.0 * vv], axis=-2)  # (T, 2N, 2)
-    order = np.argsort(crit, axis=-1)
-    crit = np.take_along_axis(crit, order, axis=-1)
+    """:func:`worst_case_norm` of (T, N, 2) vectors (N >= 1).
+
+    Directions u and -u give opposite vertices of equal norm, so half a turn of u,
+    theta in (0, pi], visits every vertex up to sign: each v_i is crossed once, at
+    ``theta_i = (ang_i + pi/2) mod pi`` (where v_i . u changes sign).
+    """
+    t_n, n = vv.shape[0], vv.shape[1]
+    # Signs just after theta = 0, u = (1, 0+): sign of v_x, ties by the sign of v_y.
+    s0 = np.where((vv[..., 0] > 0) | ((vv[..., 0] == 0) & (vv[..., 1] >= 0)), 1.0, -1.0)
+    theta = (np.arctan2(vv[..., 1], vv[..., 0]) + 0.5 * np.pi) % np.pi
+    theta[theta == 0.0] = np.pi  # crossed at 0 already counted in s0: cross it last
+    order = np.argsort(theta, axis=-1)
+    step = -2.0 * (s0[..., None] * vv)  # crossing v_i flips s_i
     step = np.take_along_axis(step, order[..., None], axis=-2)
-    # Arc k runs from crit[k] to crit[k+1] (the last one wraps around).
-    nxt = np.concatenate([crit[:, 1:], crit[:, :1] + two_pi], axis=-1)
-    mid = 0.5 * (crit + nxt)
-    u0 = np.stack([np.cos(mid[:, -1]), np.sin(mid[:, -1])], axis=-1)  # the wrapping arc
-    s0 = np.where(np.einsum("tnd,td->tn", vv, u0) >= 0, 1.0, -1.0)
-    start = np.einsum("tn,tnd->td", s0, vv)  # vertex of the wrapping arc
-    verts = start[:, None, :] + np.cumsum(step, axis=-2)  # vertex of arc k (after crossing k)
-    norms = np.hypot(verts[..., 0], verts[..., 1])
-    best = np.argmax(norms, axis=-1)
-    norm = np.take_along_axis(norms, best[:, None], axis=-1)[:, 0]
-    u = np.stack(
-        [np.cos(mid[np.arange(len(mid)), best]), np.sin(mid[np.arange(len(mid)), best])], -1
-    )
-    signs = np.where(np.einsum("tnd,td->tn", vv, u) >= 0, 1.0, -1.0)
+    start = np.einsum("tn,tnd->td", s0, vv)
+    verts = np.concatenate([start[:, None, :], start[:, None, :] + np.cumsum(step, axis=-2)], 1)
+    norms = np.hypot(verts[..., 0], verts[..., 1])  # (T, N + 1)
+    best = np.argmax(norms, axis=-1)  # the best vertex has crossed ``best`` sources
+    norm = norms[np.arange(t_n), best]
+    rank = np.empty_like(order)
+    np.put_along_axis(rank, order, np.arange(n)[None, :].repeat(t_n, 0), axis=-1)
+    signs = np.where(rank < best[:, None], -s0, s0)
     return norm, signs
 
 

@@ -654,7 +654,8 @@ def _lifting(history, t_fine: np.ndarray, t_coarse: np.ndarray) -> tuple[float, 
 
     Lifting needs at least two whole periods, and every output time and window
     boundary of one period to recur in the next: both grids uniform from 0, and
-    ``t0``, ``P`` and the end multiples of their steps.
+    ``t0``, ``P`` and the end multiples of their steps. ``P`` is the smallest multiple
+    of the history's period that both grid steps divide.
     """
     period = getattr(history, "period", None)
     found = period() if period is not None else None
@@ -663,12 +664,19 @@ def _lifting(history, t_fine: np.ndarray, t_coarse: np.ndarray) -> tuple[float, 
     t0, p = found
     end = float(t_coarse[-1])
     hc, hf = _grid_step(t_coarse), _grid_step(t_fine)
-    if hc is None or hf is None or end - t0 < 2 * p:
+    if hc is None or hf is None:
         return None
     for h in (hc, hf):
-        if not all(_is_multiple(x, h) or x == 0.0 for x in (t0, p, end)):
+        if not all(_is_multiple(x, h) or x == 0.0 for x in (t0, end)):
             return None
-    return t0, p
+    # A multiple of a period is a period: lift with the first one both grids divide
+    # (a 1290 s four-position cycle on a 60 s grid lifts with 2580 s).
+    m = 1
+    while end - t0 >= 2 * m * p:
+        if _is_multiple(m * p, hc) and _is_multiple(m * p, hf):
+            return t0, m * p
+        m += 1
+    return None
 
 
 def _restrict(pieces: Pieces, end: float) -> Pieces:
