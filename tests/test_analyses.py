@@ -1,9 +1,11 @@
 """Every analysis in ``analyses/`` runs from its scenario file (reduced where it has a
 ``--quick`` mode) and writes its generated write-up and results.
 
-These are smoke tests of the scripts as a user runs them (a subprocess, the bundled
-scenario file, an output directory of the test's own); the physics of each study is
-tested in the module tests. The full runs and their committed reports are in
+The scripts run as a user runs them (a subprocess, the bundled scenario file, an
+output directory of the test's own), and each run's ``results.json`` is then held to at
+least one headline figure computed here independently of the study code: a textbook
+closed form or the other engine path (:data:`CHECKS`). The physics of each study is
+tested in depth in the module tests. The full runs and their committed reports are in
 ``analyses/*/results/``.
 """
 
@@ -16,7 +18,13 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
+from scipy.stats import chi2
+
+from inserr.core.earth import OMEGA_IE
+from inserr.core.units import ARCSEC, DEG_PER_HOUR, MICRO_G
+from inserr.scenario.schema import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -47,7 +55,8 @@ def test_analysis_runs_from_its_scenario_file(script, extra, heading, tmp_path):
     text = report.read_text(encoding="utf-8")
     assert heading in text
     assert "nan" not in text.lower().split()  # no missing figure leaked into the prose
-    json.loads((out / "results.json").read_text(encoding="utf-8"))
+    res = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    CHECKS[script](res)
     pngs = sorted(out.glob("*.png"))
     assert pngs
     # Written by the one report writer (inserr.output.report): the HTML page beside the
@@ -56,3 +65,68 @@ def test_analysis_runs_from_its_scenario_file(script, extra, heading, tmp_path):
     linked = set(re.findall(r"\]\(([\w.-]+\.png)\)", text))
     assert linked <= {p.name for p in pngs}
     assert page.count("src='data:image/png;base64,") == len(linked)
+
+
+# --- headline figures against independent values ---------------------------------------
+NATO_MIL = 2.0 * np.pi / 6400.0  # rad
+
+
+def _check_alignment(res: dict) -> None:
+    # Static alignment, no indexing: ZUPTs cannot tell a tilt from a horizontal
+    # accelerometer bias, so the filter's tilt sigma settles at the textbook floor
+    # sigma_nabla / g, combined with the independent attitude prior (information adds).
+    # The IMU biases have equal sigmas on the three axes, so their projection in n is
+    # the same sigma whatever the attitude. 1 %: the floor is reached in ~10 s of the
+    # run; what is left is the finite ZUPT noise (0.1 % here).
+    st = res["settings"]
+    floor = st["accel_bias_ug"] * MICRO_G / st["g"]
+    prior = st["initial_tilt_arcsec"] * ARCSEC
+    expected = 1.0 / np.sqrt(1.0 / floor**2 + 1.0 / prior**2) / ARCSEC
+    final = res["static"]["none"]["final_sigma"]
+    assert final["phi_e_arcsec"] == pytest.approx(expected, rel=0.01)
+    assert final["phi_n_arcsec"] == pytest.approx(expected, rel=0.01)
+
+
+def _check_p1(res: dict) -> None:
+    # A gyro bias is common to every position of both sets (its column of the design is
+    # orthogonal to the others), so its Cramer-Rao sigma is ARW / sqrt(total dwell).
+    # Exact: 1e-9. The Monte Carlo spread of the estimates is held to the predicted
+    # sigma (noise and positioning): the six bias estimates (3 axes x 2 sets, independent
+    # noise) pool into a chi-square with 6 (runs - 1) degrees of freedom, two-sided
+    # 99.8 % band (the runs are seeded: the check is deterministic).
+    total, dof = 0.0, 0
+    for name, b in res["baseline"].items():
+        arw = b["settings"]["arw_deg_per_sqrt_h"] * DEG_PER_HOUR * 60.0  # rad/s * sqrt(s)
+        runs = b["settings"]["runs"]
+        for axis in "xyz":
+            p = b["parameters"][f"bias_{axis}"]
+            closed = arw / np.sqrt(b["dwell_time_s"]) / DEG_PER_HOUR
+            assert p["crlb_sigma"] == pytest.approx(closed, rel=1e-9), (name, axis)
+            total += (runs - 1) * p["std"] ** 2 / p["predicted_std"] ** 2
+            dof += runs - 1
+    assert chi2.ppf(0.001, dof) < total < chi2.ppf(0.999, dof)
+
+
+def _check_p3(res: dict) -> None:
+    # A gyro turning in the table plane reads A cos(w t - psi) + bias + white noise of
+    # density N (the ARW). The phase of a sinusoid of known frequency over a whole number
+    # of turns is estimated with variance 2 N^2 / (A^2 T) (amplitude, phase and offset
+    # decouple), A = |Omega projected on the table plane|. 1 %: this asymptotic form
+    # leaves out the 1 s averaging of the samples (sinc: 0.05 % at 6 deg/s) and the
+    # coupling with the jointly estimated tilts and latitude (0.1 %).
+    scen = load_scenario(ROOT / "analyses" / "p3_northfinder" / "scenario.toml")
+    req = res["time_history"]["at_requirement_time"]
+    c_bn = np.asarray(scen.motion.attitude(0.0)).reshape(3, 3)
+    normal = c_bn[:, 2]
+    lat = scen.site.lat
+    omega = OMEGA_IE * np.array([0.0, np.cos(lat), np.sin(lat)])  # ENU
+    amp = np.linalg.norm(omega - (omega @ normal) * normal)
+    sigma = scen.imu.arw * np.sqrt(2.0 / req["time_s"]) / amp
+    assert req["crlb_heading_mil"] == pytest.approx(sigma / NATO_MIL, rel=0.01)
+
+
+CHECKS = {
+    "alignment_observability/run.py": _check_alignment,
+    "p1_calibration/run.py": _check_p1,
+    "p3_northfinder/run.py": _check_p3,
+}

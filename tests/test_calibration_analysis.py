@@ -1,5 +1,6 @@
 """The P1 analysis script: its scenario file parses to the published set-up, bad keys are
-named, and the verdict wording follows the numbers (not the other way round)."""
+named, and the verdict wording of its write-up (:mod:`inserr.calibration.comparison_report`)
+follows the numbers (not the other way round)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from inserr.calibration.comparison import compare_sigmas
+from inserr.calibration.comparison_report import sensitivity_sentence, verdict_text
 from inserr.core.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,13 +57,13 @@ def test_scenario_errors_name_the_field(run_module, tmp_path):
     assert exc.value.field == "analysis.verdict.tolerence"
 
 
-def _comparison(run_module, ratios):
+def _comparison(ratios):
     import numpy as np
 
-    return run_module.compare(np.array(ratios), np.ones(12), 0.10)
+    return compare_sigmas(np.array(ratios), np.ones(12), 0.10)
 
 
-def test_verdict_follows_the_numbers(run_module):
+def test_verdict_follows_the_numbers():
     sc = {
         "tolerance": 0.10,
         "dwell_s": 300.0,
@@ -68,8 +71,8 @@ def test_verdict_follows_the_numbers(run_module):
         "arw_deg_per_sqrt_h": 5e-4,
         "positioning_error_arcsec": 3.0,
     }
-    same = _comparison(run_module, [1.05] * 12)
-    worse = _comparison(run_module, [1.3] * 3 + [1.0] * 9)
+    same = _comparison([1.05] * 12)
+    worse = _comparison([1.3] * 3 + [1.0] * 9)
     v = {
         "time_four_s": 1290.0,
         "time_six_s": 1905.0,
@@ -88,24 +91,22 @@ def test_verdict_follows_the_numbers(run_module):
             "noise_free": same,
         },
     }
-    assert "claim holds" in run_module.verdict_text(v, sc, "four", "six")[-1]
+    assert "claim holds" in verdict_text(v, sc, "four", "six")[-1]
     v["equal_dwell"] = worse
-    text = run_module.verdict_text(v, sc, "four", "six")[-1]
+    text = verdict_text(v, sc, "four", "six")[-1]
     assert "does not hold" in text and "3 of 12" in text
 
 
-def test_sensitivity_sentence_follows_the_numbers(run_module):
+def test_sensitivity_sentence_follows_the_numbers():
     from inserr.calibration.summary import positioning_sensitivity_summary
     from inserr.calibration.two_axis_table import six_position
     from inserr.core.earth import Site
 
     block = positioning_sensitivity_summary(six_position(), Site(math.radians(34.0)), "gyro")
-    text = run_module.sensitivity_sentence("six", block, 3.0)
+    text = sensitivity_sentence("six", block, 3.0)
     # The classical set's x gyro only sees the vertical Earth rate: an east tilt at the
     # x-up/x-down stops (p4, p5) feeds the north rate straight into sf_x.
     assert "sf_x among the scale factors" in text and "about east at p4 and p5" in text
     assert "all 3 biases equally" in text
     block["sf_y"]["largest"]["abs_ppm_per_arcsec"] = 10.0  # make sf_y the largest
-    assert "sf_y among the scale factors (10 ppm/arcsec" in run_module.sensitivity_sentence(
-        "six", block, 3.0
-    )
+    assert "sf_y among the scale factors (10 ppm/arcsec" in sensitivity_sentence("six", block, 3.0)

@@ -7,6 +7,10 @@
 * ``study`` — the filter per scheme on one base, and the tables.
 * ``figures`` — σ(t) and estimation-error figures.
 * ``report`` — the alignment report, for the one writer.
+* ``comparison`` — static vs indexed alignment: the filter per scheme on a static and a
+  swinging base, observability per scheme, what indexing costs, a stop-time sweep (the
+  study of ``analyses/alignment_observability``).
+* ``comparison_report`` — its write-up, for the one writer.
 """
 
 from inserr.core.lazy import lazy_exports
@@ -26,6 +30,8 @@ __getattr__, __dir__ = lazy_exports(
         "build_report": "inserr.alignment.report",
         "AlignmentInputs": "inserr.alignment.inputs",
         "alignment_inputs": "inserr.alignment.inputs",
+        "SchemeComparison": "inserr.alignment.comparison",
+        "compare_schemes": "inserr.alignment.comparison",
     },
 )
 
@@ -42,4 +48,6 @@ __all__ = [
     "build_report",
     "AlignmentInputs",
     "alignment_inputs",
+    "SchemeComparison",
+    "compare_schemes",
 ]

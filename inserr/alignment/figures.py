@@ -115,3 +115,53 @@ def error_figure(results: dict[str, AlignmentResult], states=("phi_e", "phi_n", 
     axes[0].legend()
     style.suptitle(fig, "estimation error of one simulated run (solid) and ±1σ (dashed)")
     return style.finish(fig)
+
+
+def stop_sweep_figure(runs: dict[str, AlignmentResult]) -> Figure:
+    """Heading and accelerometer-bias σ(t) of the stop-time sweep, one line per stop.
+
+    Parameters
+    ----------
+    runs : dict
+        Stop label -> filter result.
+    """
+    fig, axes = style.subplots(1, 2, width=style.WIDE, height=3.6)
+    for k, (label, r) in enumerate(runs.items()):
+        for ax, state in zip(axes, ("phi_u", "accel_bias_x"), strict=True):
+            i = STATES.index(state)
+            ax.semilogy(
+                r.t / 60,
+                r.sigma[:, i] / UNITS[state][1],
+                color=style.series_color(k),
+                lw=1,
+                label=f"stop {label}",
+            )
+    axes[0].set_ylabel("heading σ (arcmin)")
+    axes[1].set_ylabel("accel bias x σ (µg)")
+    for ax in axes:
+        ax.set_xlabel("time (min)")
+        style.grid(ax, which="both")
+    axes[0].legend()
+    return style.finish(fig)
+
+
+def comparison_figures(runs: dict) -> dict[str, Figure]:
+    """The figures of the scheme comparison, by file stem.
+
+    Parameters
+    ----------
+    runs : dict
+        The runs of :func:`inserr.alignment.comparison.compare_schemes`: ``static`` and
+        ``swing`` (scheme -> result) and ``stop_sweep`` (stop label -> result).
+
+    Returns
+    -------
+    dict
+        ``sigma_static``, ``sigma_swing``, ``attitude_error_static``, ``stop_sweep``.
+    """
+    return {
+        "sigma_static": sigma_figure(runs["static"], title="static base"),
+        "sigma_swing": sigma_figure(runs["swing"], title="P0 swinging base"),
+        "attitude_error_static": error_figure(runs["static"]),
+        "stop_sweep": stop_sweep_figure(runs["stop_sweep"]),
+    }

@@ -8,6 +8,12 @@
 * ``summary`` — JSON-ready summaries and tables in engineering units.
 * ``figures`` — P1-style deviation and repeatability figures.
 * ``report`` — the calibration report, for the one writer.
+* ``comparison`` — two position sets side by side: baseline, noise-free, equal time,
+  sweeps, designed sets (the study of ``analyses/p1_calibration``).
+* ``comparison_report`` — its write-up, for the one writer.
+* ``published`` — a published Monte Carlo table of two methods beside the model, claim
+  by claim (P1's Table 1).
+* ``published_report`` — the write-up's "Against the paper" section.
 """
 
 from inserr.core.lazy import lazy_exports
@@ -28,6 +34,8 @@ __getattr__, __dir__ = lazy_exports(
         "build_report": "inserr.calibration.report",
         "CalibrationInputs": "inserr.calibration.inputs",
         "calibration_inputs": "inserr.calibration.inputs",
+        "compare_sets": "inserr.calibration.comparison",
+        "against_published": "inserr.calibration.published",
     },
 )
 
@@ -45,4 +53,6 @@ __all__ = [
     "build_report",
     "CalibrationInputs",
     "calibration_inputs",
+    "compare_sets",
+    "against_published",
 ]

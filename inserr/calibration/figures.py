@@ -103,3 +103,49 @@ def std_figure(results: dict[str, dict[str, SensorResult]], sensor: str, title: 
     ax.set_title(title)
     ax.legend()
     return style.finish(fig)
+
+
+#: Units of the parameter classes of :func:`class_sweep_figure` (gyro).
+_CLASS_UNITS = {"sf": "ppm", "mis": "arcsec", "bias": "deg/h"}
+
+
+def class_sweep_figure(
+    series: dict[str, dict[str, list]],
+    xlabel: str,
+    title: str,
+    logx: bool = True,
+    logy: bool = True,
+) -> Figure:
+    """Three panels (scale factors, misalignments, biases): swept gyro class-RMS sigma.
+
+    Parameters
+    ----------
+    series : dict
+        Label -> ``{"x": [...], "mc": [class RMS dict, ...], "pred": [...]}`` (class
+        RMS in ppm, arcsec, deg/h; :func:`inserr.calibration.comparison.class_rms`).
+        Markers: Monte Carlo std; lines: prediction.
+    xlabel, title : str
+    logx, logy : bool
+        Logarithmic axes.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, axes = style.subplots(1, 3, width=style.WIDE, height=4.0)
+    for ax, cls in zip(axes, _CLASS_UNITS, strict=True):
+        for k, (label, s) in enumerate(series.items()):
+            color = style.series_color(k)
+            xs = s["x"]
+            ax.plot(xs, [v[cls] for v in s["mc"]], "o", color=color, label=f"{label} MC")
+            ax.plot(xs, [v[cls] for v in s["pred"]], "-", color=color, label=f"{label} predicted")
+        if logx:
+            ax.set_xscale("log")
+        if logy:
+            ax.set_yscale("log")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(f"RMS std of {cls} [{_CLASS_UNITS[cls]}]")
+        style.grid(ax, which="both")
+    axes[0].legend()
+    style.suptitle(fig, title)
+    return style.finish(fig)

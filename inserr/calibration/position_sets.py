@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -43,6 +44,7 @@ from inserr.calibration.two_axis_table import (
     TwoAxisTable,
     azimuth_table,
     trunnion_table,
+    up_axis_label,
 )
 from inserr.core.earth import Site
 from inserr.core.errors import InputError
@@ -218,6 +220,16 @@ def _best_orders(cost: np.ndarray, combos: np.ndarray, chunk: int = 1000):
     return times, orders
 
 
+def _up_axes_match(combos: np.ndarray, labels: list[str], up_axes: Sequence[str]) -> np.ndarray:
+    """Mask of the stop subsets whose up axes are exactly ``up_axes`` (as a multiset)."""
+    if combos.shape[1] != len(up_axes):
+        return np.zeros(len(combos), dtype=bool)
+    names = sorted(set(labels) | set(up_axes))
+    codes = np.array([names.index(x) for x in labels])
+    target = np.sort([names.index(x) for x in up_axes])
+    return np.all(np.sort(codes[combos], axis=1) == target, axis=1)
+
+
 def design_sets(
     site: Site,
     dwell: float = DEFAULT_DWELL,
@@ -228,6 +240,7 @@ def design_sets(
     settle: float = 0.0,
     top: int = 10,
     tables: dict[str, TwoAxisTable] | None = None,
+    up_axes: Sequence[str] | None = None,
 ) -> list[Candidate]:
     """Enumerate position sets reachable with gimbal steps of ``step`` and rank them.
 
@@ -249,6 +262,11 @@ def design_sets(
         Number of candidates returned (best first), ties merged (``equivalents``).
     tables : dict, optional
         Mechanisms to search (default :func:`candidate_tables`).
+    up_axes : sequence of str, optional
+        Keep only sets whose stops point exactly these signed IMU axes up, in any
+        order (labels of :func:`~inserr.calibration.two_axis_table.up_axis_label`;
+        e.g. ``("+x", "-x", "+y", "-y", "+z", "-z")``: every axis up and down).
+        Sizes other than ``len(up_axes)`` are then skipped.
 
     Returns
     -------
@@ -278,6 +296,7 @@ def design_sets(
     found: dict[tuple, Candidate] = {}
     for mech, table in tables.items():
         att = np.stack([table.attitude(o, i) for o, i in grid])
+        labels = [up_axis_label(c) for c in att]
         cost = np.array([[table.move_time(a, b) for b in grid] for a in grid])
         outer = {}
         for sensor in ("gyro", "accel"):
@@ -287,6 +306,10 @@ def design_sets(
             if k > len(grid):
                 continue
             combos = np.array(list(itertools.combinations(range(len(grid)), k)))
+            if up_axes is not None:
+                combos = combos[_up_axes_match(combos, labels, up_axes)]
+                if not len(combos):
+                    continue
             det_g, rank_g = _det_rank(outer["gyro"][combos].sum(axis=1))
             det_a, rank_a = _det_rank(outer["accel"][combos].sum(axis=1))
             ok = rank_g == 4 if sensors == "gyro" else (rank_g == 4) & (rank_a == 4)

@@ -345,11 +345,33 @@ def up_axis_label(c_sn: np.ndarray) -> str:
     str
         ``"+x"`` ... ``"-z"``, or ``"(ux, uy, uz)"`` (up in IMU components).
     """
-    up_s = np.asarray(c_sn)[2, :]
-    k = int(np.argmax(np.abs(up_s)))
-    if abs(up_s[k]) > math.cos(DEG):
-        return ("+" if up_s[k] > 0 else "-") + "xyz"[k]
-    return "(" + ", ".join(f"{v:+.3f}" for v in up_s) + ")"
+    return _axis_label(np.asarray(c_sn)[2, :])
+
+
+def _axis_label(v_s: np.ndarray) -> str:
+    k = int(np.argmax(np.abs(v_s)))
+    if abs(v_s[k]) > math.cos(DEG):
+        return ("+" if v_s[k] > 0 else "-") + "xyz"[k]
+    return "(" + ", ".join(f"{v:+.3f}" for v in v_s) + ")"
+
+
+def pointing(c_sn: np.ndarray) -> dict[str, str]:
+    """Signed IMU axis along east, north and up (labels as :func:`up_axis_label`).
+
+    Row ``k`` of ``C_s^n`` is ENU axis ``k`` in IMU components.
+
+    Parameters
+    ----------
+    c_sn : (3, 3) array
+        IMU-to-ENU DCM ``C_s^n``.
+
+    Returns
+    -------
+    dict
+        ``{"east": "+x", "north": "+y", "up": "+z"}`` for ``C_s^n = I``.
+    """
+    c = np.asarray(c_sn)
+    return {name: _axis_label(c[k, :]) for k, name in enumerate(("east", "north", "up"))}
 
 
 # --- mechanisms ----------------------------------------------------------------

@@ -6,8 +6,15 @@
 * ``filter`` — the Kalman filter and the heading/latitude solution.
 * ``study`` — Monte Carlo repeatability beside the bound
   (:func:`~inserr.northfinder.study.monte_carlo`).
-* ``figures`` — heading, convergence and latitude figures.
+* ``figures`` — heading, convergence and latitude figures; the accuracy study's sweeps
+  and maps.
 * ``report`` — the north-finder report, for the one writer.
+* ``accuracy`` — the accuracy study: heading σ vs time, table rate, gyro grade and over
+  heading × latitude; the gyro grade that meets a requirement (the study of
+  ``analyses/p3_northfinder``).
+* ``accuracy_report`` — its write-up, for the one writer.
+* ``published`` — published heading and latitude repeatability beside the model, and the
+  sensor grade they imply.
 """
 
 from inserr.core.lazy import lazy_exports
@@ -28,6 +35,9 @@ __getattr__, __dir__ = lazy_exports(
         "build_report": "inserr.northfinder.report",
         "NorthfinderInputs": "inserr.northfinder.inputs",
         "northfinder_inputs": "inserr.northfinder.inputs",
+        "AccuracyStudy": "inserr.northfinder.accuracy",
+        "accuracy_study": "inserr.northfinder.accuracy",
+        "against_published": "inserr.northfinder.published",
     },
 )
 
@@ -45,4 +55,7 @@ __all__ = [
     "build_report",
     "NorthfinderInputs",
     "northfinder_inputs",
+    "AccuracyStudy",
+    "accuracy_study",
+    "against_published",
 ]
