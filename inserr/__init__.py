@@ -36,6 +36,14 @@ Conventions (stated once, with equations, in ``docs/theory.md``):
   :mod:`inserr.core.units` and strings with units only at the edges (scenario
   files, flags, reports).
 
+The notebook front door (every result has ``metrics()``, ``to_dataframe()``,
+``budget()``, ``plot()`` and a Jupyter summary; ``docs/tutorials/notebook.md``):
+``inserr.load_scenario(path)``, ``inserr.drift(scenario, scheme)``,
+``inserr.compare(scenario, schemes)``, ``inserr.align(scenario)``,
+``inserr.calibrate(scenario)``, ``inserr.northfind(scenario)``,
+``inserr.sweep(scenario, params)``, ``inserr.imu_budget(recording, rate)``
+(``inserr.drift`` and ``inserr.sweep`` are the subpackages, callable).
+
 Public entry points, importable from ``inserr`` directly (each imported on first
 use, so ``import inserr`` itself imports no other module: not numpy, matplotlib,
 scipy, control or dask): :func:`load_scenario`, :func:`scenario_from_dict`,
@@ -83,6 +91,13 @@ _EXPORTS = {
     "run_scheme": "inserr.drift.study",
     "validate": "inserr.reference.validation",
     "run_alignment": "inserr.alignment.filter",
+    # The notebook front door (``inserr.drift`` and ``inserr.sweep`` are the callable
+    # subpackages themselves; see inserr.core.lazy.callable_package).
+    "compare": "inserr.drift.api",
+    "align": "inserr.alignment.api",
+    "calibrate": "inserr.calibration.api",
+    "northfind": "inserr.northfinder.api",
+    "imu_budget": "inserr.calibration.api",
 }
 
 __all__ = ["__version__", *_EXPORTS]

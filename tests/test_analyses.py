@@ -125,8 +125,58 @@ def _check_p3(res: dict) -> None:
     assert req["crlb_heading_mil"] == pytest.approx(sigma / NATO_MIL, rel=0.01)
 
 
+def _check_p2(res: dict) -> None:
+    # P2's traditional cycle: stops at -135, 45, 135, -45 deg (A C D B), reached by turns
+    # of +180, +90, -180, -90 deg at rate w. A turn from h0 to h1 in direction d adds
+    # (sin h1 - sin h0) / (d w) to the integral of cos h (the diagonal of the horizontal
+    # block of C) and -(cos h1 - cos h0) / (d w) to that of sin h (the off-diagonal); the
+    # four stops (opposite pairs) add nothing. The modified cycle cancels the turns too.
+    # Closed forms to roundoff: 1e-9 s.
+    scen = load_scenario(ROOT / "analyses" / "p2_four_position" / "scenario.toml")
+    rate, stop = scen.scheme_rate, scen.scheme_stop
+    path = np.radians([-135.0, 45.0, 135.0, -45.0, -135.0])
+    turn = np.radians([180.0, 90.0, -180.0, -90.0])
+    d = np.sign(turn)
+    diag = np.sum((np.sin(path[1:]) - np.sin(path[:-1])) / (d * rate))
+    off = np.sum(-(np.cos(path[1:]) - np.cos(path[:-1])) / (d * rate))
+    assert abs(off) < 1e-12 and diag == pytest.approx(2 * np.sqrt(2) / rate, rel=1e-12)
+    for start in ("stop", "turn"):
+        trad = res["cycle_integrals"][start]["four-position"]
+        assert np.allclose(trad["horizontal_cycle_integral_s"], diag * np.eye(2), rtol=0, atol=1e-9)
+        assert np.allclose(trad["stops_horizontal_s"], 0.0, atol=1e-9)
+        # Four stops and 540 deg of turning per cycle.
+        cycle = 4 * stop + np.abs(turn).sum() / rate
+        assert trad["cycle_time_s"] == pytest.approx(cycle, rel=1e-12)
+        mod = res["cycle_integrals"][start]["four-position-modified"]
+        assert np.allclose(mod["horizontal_cycle_integral_s"], 0.0, atol=1e-9)
+
+
+def _check_p0(res: dict) -> None:
+    # P0's own figures (typed from the paper) are the ones the write-up sets the model
+    # beside (the closest reading's relative gap is taken against them), and every
+    # figure quoted obeys what holds for any set of error vectors: the all-positive
+    # pattern and the RMS over random signs never exceed the worst pattern, which is
+    # the highest of the range over all patterns, and the proved bound lies below the
+    # lowest pattern found. Roundoff: 1e-12; the worst figure and the range's highest
+    # come from two samplings of the same maximum: 1e-9.
+    paper = {"exp1": [8.57, 3.70, 2.97], "exp2": [16.13, 12.90, 1.98]}
+    for exp, comp in res["against_the_paper"]["comparisons"].items():
+        closest = list(comp["closest"].values())
+        assert len(closest) == 3
+        for c, figure in zip(closest, paper[exp], strict=True):
+            assert c["nmi"] == pytest.approx(figure * (1 + c["gap"]), rel=1e-12)
+        for per in comp["detail"].values():
+            for d in per.values():
+                assert d["all-positive"] <= d["worst"] * (1 + 1e-12)
+                assert d["RMS"] <= d["worst"] * (1 + 1e-12)
+                assert d["worst"] == pytest.approx(d["highest"], rel=1e-9)
+                assert d["lowest_bound"] <= d["lowest"] * (1 + 1e-12)
+
+
 CHECKS = {
     "alignment_observability/run.py": _check_alignment,
     "p1_calibration/run.py": _check_p1,
     "p3_northfinder/run.py": _check_p3,
+    "p2_four_position/run.py": _check_p2,
+    "p0_swinging_base/run.py": _check_p0,
 }

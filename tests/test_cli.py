@@ -222,12 +222,13 @@ def test_non_utf8_scenario_and_oversized_run_are_input_errors(tmp_path, capsys):
     scen.write_bytes(b"\xff\xfe[site]\n")
     assert main(["run", str(scen), "--out", str(tmp_path / "r")]) == 2
     assert "UTF-8" in capsys.readouterr().err
-    # 100000 h at 1 s would need ~130 GB; refused before any work, naming the key and
-    # the fix. output.step was not given as a flag, so the message names no flag.
-    assert main(["drift", "--duration", "100000 h"]) == 2
+    # 5000 h at 1 s would need ~6.5 GB; refused before any work, naming the key and the
+    # fix (5000 h = 1.8e7 s over 3e6 samples: at least 6 s). output.step was not given as
+    # a flag, so the message names no flag.
+    assert main(["drift", "--duration", "5000 h"]) == 2
     err = capsys.readouterr().err
-    assert "error: output.step: " in err and "at least 120 s" in err
-    assert main(["drift", "--duration", "100000 h", "--step", "60"]) == 2
+    assert "error: output.step: " in err and "at least 6 s" in err
+    assert main(["drift", "--duration", "5000 h", "--step", "3"]) == 2
     assert "error: --step (output.step): " in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["binary.toml"]
 

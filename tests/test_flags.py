@@ -22,7 +22,7 @@ import pytest
 from inserr.cli.main import available_commands, build_parser, main
 from inserr.core.errors import InputError
 from inserr.core.units import parse_quantity
-from inserr.scenario.flags import CONTROLS, FLAGS, help_text, scenario_from_args
+from inserr.scenario.flags import CONTROLS, FLAGS, RECORDING_FLAGS, help_text, scenario_from_args
 from inserr.scenario.schema import (
     CHOICES,
     SCHEMA,
@@ -76,7 +76,13 @@ def _options(command: str) -> dict[str, argparse.Action]:
     }
 
 
-COMMANDS = [c for c in available_commands() if c != "run"]
+#: The commands that read a scenario (``imu-budget`` reads a recording: its own flags,
+#: RECORDING_FLAGS, checked below).
+COMMANDS = [c for c in available_commands() if c not in ("run", "imu-budget")]
+
+
+def test_imu_budget_has_only_its_recording_flags():
+    assert set(_options("imu-budget")) == set(RECORDING_FLAGS) | {"out", "json"}
 
 
 def _without_default(text: str) -> str:

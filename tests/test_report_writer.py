@@ -98,9 +98,9 @@ def spied(monkeypatch):
         calls["write"].append((self, Path(out_dir)))
         return write(self, out_dir, markdown_name)
 
-    def spy_figure(self, fig, name, caption=""):
+    def spy_figure(self, fig, name, caption="", **options):
         calls["figures"].append(fig)
-        return figure(self, fig, name, caption)
+        return figure(self, fig, name, caption, **options)
 
     monkeypatch.setattr(Report, "write", spy_write)
     monkeypatch.setattr(Report, "figure", spy_figure)
@@ -123,12 +123,16 @@ def test_every_study_report_goes_through_the_one_writer(command, spied, tmp_path
     rep = spied["write"][0][0]
     figures = [b.payload[0] for b in rep.blocks if b.kind == "figure"]
     assert figures, "every study's report has figures"
+    attached = {b.payload[0] for b in rep.blocks if b.kind == "file"}
 
-    # The same layout for every study.
+    # The same layout for every study (plus the data files a study attaches).
     files = {p.name for p in out.iterdir()}
-    assert files == {"report.md", "report.html", "results.json", MARKER} | {
+    assert files == {"report.md", "report.html", "results.json", MARKER} | attached | {
         f"{name}.png" for name in figures
     }
+    for name in attached:  # linked from both pages
+        assert f"]({name})" in (out / "report.md").read_text(encoding="utf-8")
+        assert f"href='{name}'" in (out / "report.html").read_text(encoding="utf-8")
     md = (out / "report.md").read_text(encoding="utf-8")
     page = (out / "report.html").read_text(encoding="utf-8")
     assert md.startswith(f"# {rep.title}\n")

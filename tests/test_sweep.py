@@ -229,13 +229,11 @@ def _png(**savefig) -> bytes:
     return buf.getvalue()
 
 
-def test_figures_always_belong_to_the_current_results(tmp_path):
-    """Each run leaves exactly its own figures; files inserr did not write stay as they are."""
+def test_figures_always_belong_to_the_current_results(tmp_path, capsys):
+    """Each run leaves exactly its own figures; a file inserr did not write stops the sweep."""
     from inserr.sweep.runner import LocalEngine, run_sweep
 
     out = tmp_path / "out"
-    # A sweep directory exists first (a new sweep refuses a directory of other files);
-    # then the user drops files into it.
     assert main(["sweep", *BASE, *GRID, "--workers", "1", "--out", str(out), "--no-plots"]) == 0
     foreign = {  # the user's files, some named like inserr's figures
         "sweep_mine.png": _png(),
@@ -243,7 +241,14 @@ def test_figures_always_belong_to_the_current_results(tmp_path):
         "notes.txt": b"keep me",
     }
     for name, data in foreign.items():
+        before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
         (out / name).write_bytes(data)
+        # Refused before any work, naming the file; nothing in the directory changes.
+        assert main(["sweep", *BASE, *GRID, "--workers", "1", "--out", str(out)]) == 2
+        assert f"holds {name}, which inserr did not write" in capsys.readouterr().err
+        after = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+        assert after == {**before, name: data}
+        (out / name).unlink()
 
     def figures_now() -> set[str]:
         return {p.name for p in sweep_figures(out)}
@@ -256,7 +261,7 @@ def test_figures_always_belong_to_the_current_results(tmp_path):
     ]:
         assert main(["sweep", *BASE, *grid, "--workers", "1", "--out", str(out)]) == 0
         assert figures_now() == names
-        assert {p.name for p in out.glob("*.png")} == names | {"sweep_mine.png"}
+        assert {p.name for p in out.glob("*.png")} == names
 
     class Interrupted(LocalEngine):
         def run(self, tasks, on_result):
@@ -272,7 +277,6 @@ def test_figures_always_belong_to_the_current_results(tmp_path):
     assert figures_now() == {"sweep.png"}
     assert sweep(out, "--workers", "1") == 0  # --no-plots: no figure of other results is left
     assert figures_now() == set()
-    assert {p.name: p.read_bytes() for p in out.iterdir() if p.name in foreign} == foreign
 
 
 def test_figure_mark_is_read_from_the_png_chunks(tmp_path):
@@ -540,7 +544,8 @@ def test_sweep_out_never_mixes_with_a_users_files(tmp_path, monkeypatch, capsys)
     """A sweep refuses a file, the working directory and a directory of other files,
     before any work; an earlier sweep's directory is accepted (that is resuming)."""
     from inserr.cli.main import main
-    from inserr.sweep.store import check_sweep_dir
+    from inserr.core.errors import InputError
+    from inserr.sweep.store import MARKER, check_sweep_dir
 
     mine = tmp_path / "notes"
     mine.mkdir()
@@ -555,6 +560,22 @@ def test_sweep_out_never_mixes_with_a_users_files(tmp_path, monkeypatch, capsys)
     monkeypatch.chdir(mine)
     assert main(argv + ["--out", "."]) == 2
     assert "working directory" in capsys.readouterr().err
+    # A points/ folder is not enough to pass for a sweep (issue 14, D2): the user's
+    # results.csv beside it is never overwritten.
+    gis = tmp_path / "gis"
+    (gis / "points").mkdir(parents=True)
+    (gis / "results.csv").write_text("lat,lon\n")
+    assert main(argv + ["--out", str(gis)]) == 2
+    assert "gis holds points, which inserr did not write" in capsys.readouterr().err
+    assert (gis / "results.csv").read_text() == "lat,lon\n"
+    # An earlier sweep's directory is accepted (resuming), with or without its marker
+    # (sweeps written before markers are recognized by their content).
     earlier = tmp_path / "earlier"
-    (earlier / "points").mkdir(parents=True)
+    assert main(argv + ["--out", str(earlier), "--no-plots"]) == 0
+    capsys.readouterr()
     assert check_sweep_dir(earlier) == earlier.resolve()
+    (earlier / MARKER).unlink()
+    assert check_sweep_dir(earlier) == earlier.resolve()
+    (earlier / "points" / "notes.txt").write_text("mine")
+    with pytest.raises(InputError, match="not an inserr sweep"):
+        check_sweep_dir(earlier)

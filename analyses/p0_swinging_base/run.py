@@ -280,6 +280,7 @@ def main(argv: list[str] | None = None) -> int:
     quiet = {
         "output.step": "600 s",
         "output.covariance_step": "600 s",
+        "output.export_step": "600 s",
         "imu.arw": "0 deg/sqrt(h)",
         "imu.vrw": "0 ug/sqrt(Hz)",
         "motion.heading_convention": s1.heading_convention,

@@ -7,6 +7,7 @@
 * ``study`` — the filter per scheme on one base, and the tables.
 * ``figures`` — σ(t) and estimation-error figures.
 * ``report`` — the alignment report, for the one writer.
+* ``api`` — the notebook front door: ``align`` from a scenario, file or dict.
 * ``comparison`` — static vs indexed alignment: the filter per scheme on a static and a
   swinging base, observability per scheme, what indexing costs, a stop-time sweep (the
   study of ``analyses/alignment_observability``).
@@ -30,6 +31,8 @@ __getattr__, __dir__ = lazy_exports(
         "build_report": "inserr.alignment.report",
         "AlignmentInputs": "inserr.alignment.inputs",
         "alignment_inputs": "inserr.alignment.inputs",
+        "align": "inserr.alignment.api",
+        "AlignmentStudy": "inserr.alignment.api",
         "SchemeComparison": "inserr.alignment.comparison",
         "compare_schemes": "inserr.alignment.comparison",
     },
@@ -48,6 +51,8 @@ __all__ = [
     "build_report",
     "AlignmentInputs",
     "alignment_inputs",
+    "align",
+    "AlignmentStudy",
     "SchemeComparison",
     "compare_schemes",
 ]

@@ -8,6 +8,8 @@
 * ``summary`` — JSON-ready summaries and tables in engineering units.
 * ``figures`` — P1-style deviation and repeatability figures.
 * ``report`` — the calibration report, for the one writer.
+* ``allan`` — IMU noise terms from a static recording: Allan deviation, IEEE slopes.
+* ``api`` — the notebook front door: ``calibrate`` and ``imu_budget``.
 * ``comparison`` — two position sets side by side: baseline, noise-free, equal time,
   sweeps, designed sets (the study of ``analyses/p1_calibration``).
 * ``comparison_report`` — its write-up, for the one writer.
@@ -34,6 +36,12 @@ __getattr__, __dir__ = lazy_exports(
         "build_report": "inserr.calibration.report",
         "CalibrationInputs": "inserr.calibration.inputs",
         "calibration_inputs": "inserr.calibration.inputs",
+        "calibrate": "inserr.calibration.api",
+        "CalibrationStudy": "inserr.calibration.api",
+        "imu_budget": "inserr.calibration.api",
+        "NoiseBudget": "inserr.calibration.api",
+        "read_recording": "inserr.calibration.allan",
+        "fit_recording": "inserr.calibration.allan",
         "compare_sets": "inserr.calibration.comparison",
         "against_published": "inserr.calibration.published",
     },
@@ -53,6 +61,12 @@ __all__ = [
     "build_report",
     "CalibrationInputs",
     "calibration_inputs",
+    "calibrate",
+    "CalibrationStudy",
+    "imu_budget",
+    "NoiseBudget",
+    "read_recording",
+    "fit_recording",
     "compare_sets",
     "against_published",
 ]

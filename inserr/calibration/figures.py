@@ -149,3 +149,97 @@ def class_sweep_figure(
     axes[0].legend()
     style.suptitle(fig, title)
     return style.finish(fig)
+
+
+#: Line styles of the fitted terms' slope lines in the Allan-deviation figure.
+_TERM_STYLES = {
+    "white": ("--", "slope -1/2: angle / velocity random walk"),
+    "bias_instability": ("-.", "slope 0: bias instability"),
+    "rate_random_walk": (":", "slope +1/2: rate random walk"),
+    "rate_ramp": ((0, (5, 1, 1, 1, 1, 1)), "slope +1: rate ramp"),
+}
+
+
+def allan_figure(fit, title: str = "") -> Figure:
+    """Allan deviation of every axis with the fitted terms and their intervals.
+
+    Two rows (gyro in deg/h, accelerometer in micro-g) by three columns (x, y, z),
+    log-log: the measured overlapping Allan deviation with its 1-sigma error bar from
+    the number of clusters, the fitted curve with its confidence band (shaded), and
+    the slope line of every term the data resolves. One legend below the panels.
+
+    Parameters
+    ----------
+    fit : inserr.calibration.allan.NoiseFit
+        The fitted recording (SI).
+    title : str
+        Figure title (default: the recording's file name).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    from inserr.calibration.allan import ADEV_UNITS, AXES, SENSORS
+
+    fig, axes = style.fixed_grid(
+        2,
+        3,
+        width=style.WIDE,
+        panel_height=2.9,
+        left=0.85,
+        bottom=1.15,
+        wspace=0.75,
+        hspace=0.55,
+        squeeze=False,
+    )
+    pct = f"{fit.confidence:.0%}"
+    for i, sensor in enumerate(SENSORS):
+        unit, si = ADEV_UNITS[sensor]
+        for j, axis in enumerate(AXES):
+            ax = axes[i, j]
+            f = fit.axes[(sensor, axis)]
+            c = f.curve
+            color = style.series_color(j)
+            tau = np.geomspace(c.tau[0], c.tau[-1], 200)
+            lo, hi = f.model_band(tau)
+            ax.fill_between(tau, lo / si, hi / si, color=color, alpha=0.2, lw=0)
+            ax.plot(tau, f.model(tau) / si, color=color, lw=1.3)
+            ax.errorbar(
+                c.tau,
+                c.adev / si,
+                yerr=c.rel_error * c.adev / si,
+                fmt="o",
+                ms=3,
+                color="k",
+                elinewidth=0.8,
+                capsize=1.5,
+            )
+            for name, term in f.terms.items():
+                if term.resolved:
+                    ls, _ = _TERM_STYLES[name]
+                    ax.plot(tau, f.term_line(name, tau) / si, color="0.35", lw=0.9, ls=ls)
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            # Limits from the data: an interval reaching 0 runs to the bottom edge.
+            ax.set_ylim(0.3 * c.adev.min() / si, 3.0 * c.adev.max() / si)
+            ax.set_title(f"{sensor} {axis}")
+            style.grid(ax)
+            if j == 0:
+                ax.set_ylabel(f"Allan deviation ({unit})")
+            if i == 1:
+                ax.set_xlabel("averaging time tau (s)")
+    handles = [
+        Line2D([], [], color="k", marker="o", ls="", ms=3, label="data, 1-sigma from clusters"),
+        Line2D([], [], color="0.2", lw=1.3, label="fitted sum (axis colour)"),
+        Patch(color="0.2", alpha=0.2, label=f"{pct} interval of the fit"),
+    ] + [
+        Line2D([], [], color="0.35", lw=0.9, ls=ls, label=lab) for ls, lab in _TERM_STYLES.values()
+    ]
+    fig.legend(handles=handles, loc="lower center", ncols=4, frameon=False, fontsize=7)
+    from pathlib import Path
+
+    style.suptitle(fig, title or f"Allan deviation: {Path(fit.recording.source).name}")
+    return style.finish(fig)

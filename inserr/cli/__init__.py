@@ -4,7 +4,7 @@ Each command is one module exposing ``HELP``, ``add_arguments(parser)`` and
 ``run(args)``, imported only when its command runs:
 
 * ``main`` — the entry point and the command table.
-* ``common`` — shared flags and output formatting (``--json``, tables).
+* ``common`` — shared flags and output formatting (``--json``, tables, provenance).
 * ``modes`` — eigen-periods of the error model.
 * ``drift`` — drift of an IMU budget under a scheme.
 * ``compare`` — several schemes on one scenario.
@@ -16,6 +16,7 @@ Each command is one module exposing ``HELP``, ``add_arguments(parser)`` and
 * ``calibrate`` — multi-position calibration.
 * ``northfind`` — the north finder.
 * ``sweep`` — parameter sweeps.
+* ``imu_budget`` — noise terms of a static recording (Allan deviation).
 """
 
 from inserr.core.lazy import lazy_exports

@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from inserr.cli.common import add_json_flag, emit, format_table
+from inserr.cli.common import add_json_flag, emit, format_table, stamp
 from inserr.scenario.flags import INITIAL, MOTION, add_flags, scenario_from_args
 
 #: The flags of ``inserr align``.
@@ -101,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     }
     payload = {**common, **runs[names[0]]} if len(names) == 1 else {**common, "runs": runs}
     if args.out:
-        build_report(
+        rep = build_report(
             results,
             payload,
             base=base,
@@ -109,7 +109,8 @@ def run(args: argparse.Namespace) -> int:
             settings=settings,
             floor=floor,
             floor_diffuse=floor_diffuse,
-        ).write(args.out)
+        )
+        stamp(rep, scen, args).write(args.out)
     keys = [_key(s) for s in SHOWN]
     header = (
         ["state"]

@@ -23,7 +23,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from inserr.cli.common import add_json_flag, emit, format_table
+from inserr.cli.common import add_json_flag, emit, format_table, stamp
 from inserr.core.units import DEG
 from inserr.scenario.flags import add_flags, scenario_from_args
 
@@ -178,7 +178,8 @@ def run(args: argparse.Namespace) -> int:
     """
     from inserr.calibration.inputs import calibration_inputs
 
-    inp = calibration_inputs(scenario_from_args(args, "calibration"))
+    scen = scenario_from_args(args, "calibration")
+    inp = calibration_inputs(scen)
     if inp.design:
         return _design(args, inp)
     config = inp.config
@@ -195,7 +196,7 @@ def run(args: argparse.Namespace) -> int:
 
     summary, results = calibration_summary(inp.position_set, inp.site, inp.truth, config)
     if args.out:
-        build_report(summary, results).write(args.out)
+        stamp(build_report(summary, results), scen, args).write(args.out)
     lines = [
         f"{summary['method']}: {summary['n_positions']} positions at latitude "
         f"{summary['latitude_deg']:g} deg; "

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from inserr.cli.common import add_json_flag, emit, format_table
+from inserr.cli.common import add_json_flag, by_column, emit, format_table, warn_empty_budget
 from inserr.output.progress import progress
 from inserr.scenario.flags import DRIFT, add_flags, scenario_from_args
 
@@ -23,8 +23,11 @@ def run(args: argparse.Namespace) -> int:
     names = compared_schemes(scen)
     runs = [run_scheme(scen, n) for n in progress(names, total=len(names), desc="schemes")]
     if args.out:
-        build_report(scen, runs, f"inserr scheme comparison: {scen.name}").write(args.out)
-    header, rows = metrics_table(runs)
+        build_report(
+            scen, runs, f"inserr scheme comparison: {scen.name}", getattr(args, "scenario", None)
+        ).write(args.out)
+    header, rows = by_column(*metrics_table(runs))
+    warn_empty_budget(args, runs)
     emit(
         args,
         {"scenario": scen.name, "runs": [r.metrics() for r in runs]},

@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
+import threading
+from contextlib import contextmanager
 
 from inserr.core.errors import InputError
 
@@ -27,6 +30,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "calibrate": ("inserr.cli.calibrate", "Multi-position gyro/accelerometer calibration."),
     "northfind": ("inserr.cli.northfind", "Rotation-modulation north finder (1 gyro, 1 accel)."),
     "sweep": ("inserr.cli.sweep", "Parameter sweep of a scenario on Dask."),
+    "imu-budget": (
+        "inserr.cli.imu_budget",
+        "IMU noise terms (ARW, bias instability, RRW) from a static recording (Allan deviation).",
+    ),
 }
 
 
@@ -55,6 +62,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         prog="inserr",
         description="Error analysis of rotation-modulated strapdown inertial navigation.",
     )
+    from inserr import __version__
+
+    parser.add_argument("--version", action="version", version=f"inserr {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name, (module, help_) in available_commands().items():
         p = sub.add_parser(name, help=help_, description=help_)
@@ -118,6 +128,51 @@ def join_negative_values(argv: list[str], parser: argparse.ArgumentParser) -> li
     return out
 
 
+def input_files(args: argparse.Namespace) -> list[str]:
+    """The files a command reads that are named on its command line (the scenario file)."""
+    path = getattr(args, "scenario", None)
+    return [path] if path else []
+
+
+@contextmanager
+def _terminate_as_interrupt():
+    """Let SIGTERM (``kill PID``) unwind like Ctrl-C, so no partial output is kept.
+
+    Only in the main thread of the process (where Python delivers signals); the
+    previous handler is restored afterwards.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+#: Optional packages (top-level import names) -> the extra of inserr that installs them.
+OPTIONAL_EXTRAS = {"dask": "sweep", "distributed": "sweep", "pyins": "reference"}
+
+
+def _missing_extra(command: str, exc: ModuleNotFoundError) -> int:
+    """One line naming the ``pip install`` that fixes a missing optional package."""
+    top = (exc.name or "").split(".")[0]
+    extra = OPTIONAL_EXTRAS.get(top)
+    if extra is None:  # not an optional extra: a broken installation, keep the traceback
+        raise exc
+    print(
+        f"inserr {command}: error: needs the optional package {top!r}, which is not installed. "
+        f"Fix: pip install 'inserr[{extra}]'",
+        file=sys.stderr,
+    )
+    return 2
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the process exit status (0 ok, 2 bad input, 1 failure)."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -127,7 +182,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 2
-    module = importlib.import_module(COMMANDS[args.command][0])
+    try:
+        module = importlib.import_module(COMMANDS[args.command][0])
+    except ModuleNotFoundError as exc:
+        return _missing_extra(args.command, exc)
     if getattr(args, "json", False):
         from inserr.output.progress import set_quiet
 
@@ -138,14 +196,17 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, "out", None) is not None and args.command not in _OWN_OUT_CHECK:
             from inserr.output.report import check_report_dir
 
-            check_report_dir(args.out, "--out")
-        return int(module.run(args) or 0)
+            check_report_dir(args.out, "--out", inputs=input_files(args))
+        with _terminate_as_interrupt():
+            return int(module.run(args) or 0)
     except InputError as exc:
         from inserr.scenario.flags import name_the_flag
 
         # The library names scenario keys; add the flag where the value came from one.
         print(f"inserr {args.command}: error: {name_the_flag(exc, args)}", file=sys.stderr)
         return 2
+    except ModuleNotFoundError as exc:
+        return _missing_extra(args.command, exc)
     except KeyboardInterrupt:
         what = (
             "finished points are kept; rerun with the same --out to resume"

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import argparse
 
-from inserr.cli.common import add_json_flag, emit, format_table
+from inserr.cli.common import add_json_flag, emit, format_table, stamp
 from inserr.scenario.flags import add_flags, scenario_from_args
 
 HELP = "Rotation-modulation north finder (1 gyro, 1 accel)."
@@ -89,7 +89,8 @@ def run(args: argparse.Namespace) -> int:
     from inserr.northfinder.inputs import northfinder_inputs
     from inserr.northfinder.study import monte_carlo
 
-    inp = northfinder_inputs(scenario_from_args(args, "northfinder"))
+    scen = scenario_from_args(args, "northfinder")
+    inp = northfinder_inputs(scen)
     result = monte_carlo(
         inp.pose,
         inp.instrument,
@@ -109,7 +110,9 @@ def run(args: argparse.Namespace) -> int:
         from inserr.northfinder.report import build_report
 
         summary["report"] = str(
-            build_report(result, summary, inp.pose, inp.instrument).write(args.out)
+            stamp(build_report(result, summary, inp.pose, inp.instrument), scen, args).write(
+                args.out
+            )
         )
     emit(args, summary, _human(summary))
     return 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from inserr.cli.common import add_json_flag, emit, format_table
+from inserr.cli.common import add_json_flag, by_column, emit, format_table, warn_empty_budget
 from inserr.output.progress import progress
 
 
@@ -25,14 +25,15 @@ def run(args: argparse.Namespace) -> int:
     out = args.out
     if out is None:  # a given --out was checked by the CLI entry point already
         out = f"{Path(args.scenario).stem}_report"
-        check_report_dir(out)
+        check_report_dir(out, inputs=[args.scenario])
     names = (scen.scheme_name,) + tuple(n for n in scen.compare if n != scen.scheme_name)
     runs = [run_scheme(scen, n) for n in progress(names, total=len(names), desc="schemes")]
-    path = build_report(scen, runs).write(out)
-    header, rows = metrics_table(runs)
+    path = build_report(scen, runs, source=args.scenario).write(out)
+    header, rows = by_column(*metrics_table(runs))
+    warn_empty_budget(args, runs)
     emit(
         args,
         {"scenario": scen.name, "report": str(path), "runs": [r.metrics() for r in runs]},
-        format_table(header, rows) + f"\n\nreport written to {path}/report.html",
+        format_table(header, rows) + f"\n\nreport written to {out}/report.html",
     )
     return 0

@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     base = scenario_from_args(args)
     grid = build_grid(base)
     out = args.out or default_out_dir(base, getattr(args, "scenario", None))
-    check_sweep_dir(out, "--out")
+    check_sweep_dir(out, "--out", inputs=[args.scenario] if args.scenario else [])
     # Connect (or fail) before the output directory exists.
     engine = open_engine(args.scheduler, args.workers)
     res = run_sweep(grid, out, scheduler=engine, plots=not args.no_plots)

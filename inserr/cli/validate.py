@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import argparse
 
-from inserr.cli.common import add_json_flag, emit, format_table
+from inserr.cli.common import add_json_flag, emit, format_table, stamp
 from inserr.scenario.flags import DRIFT, add_flags, scenario_from_args
 
 #: The flags of ``inserr validate``: the drift scenario and the reference's settings.
@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     require_pyins()
     v = validate_scenario(scen)
     if args.out:
-        build_report(v).write(args.out)
+        stamp(build_report(v), scen, args).write(args.out)
     s = v.summary()
     rows = [
         [k, v_]

@@ -36,7 +36,13 @@ class InputError(ValueError):
 
 
 def require_finite(value: float, field: str) -> float:
-    """Return ``float(value)`` or raise :class:`InputError` if it is NaN or infinite."""
+    """Return ``float(value)`` or raise :class:`InputError` if it is NaN or infinite.
+
+    A string is a TypeError, not a number: the library takes SI floats, and ``"34"``
+    would otherwise pass as 34 rad (units are read at the edge, by the scenario).
+    """
+    if isinstance(value, (str, bytes)):
+        raise TypeError(f"{field}: expected a number in SI units, got the string {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):

@@ -58,7 +58,16 @@ def error_matrix(scale_factor: np.ndarray, misalignment: np.ndarray) -> np.ndarr
 
 
 def _vec(value, n: int, name: str) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
+    if (
+        value is None
+        or isinstance(value, (str, bytes))
+        or (isinstance(value, (list, tuple)) and any(isinstance(v, (str, bytes)) for v in value))
+    ):
+        raise TypeError(f"{name}: expected a number or {n} numbers in SI units, got {value!r}")
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected a number or {n} numbers, got {value!r}") from None
     if a.ndim == 0:
         a = np.full(n, float(a))
     if a.shape != (n,):

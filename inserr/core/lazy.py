@@ -53,3 +53,31 @@ def lazy_exports(
 
     __getattr__.exports = dict(names)
     return __getattr__, __dir__
+
+
+def callable_package(package: str, module: str, name: str) -> None:
+    """Make the package ``package`` callable: ``package(...)`` runs ``module.name(...)``.
+
+    For the notebook front door, where a subpackage and its main verb share a name
+    (``inserr.drift`` is the drift chapter, and ``inserr.drift(scenario, "two-position")``
+    runs it). Only the package's own module object changes class (Python allows it
+    for modules); ``module`` is imported at the first call, not now.
+
+    Parameters
+    ----------
+    package : str
+        The package's ``__name__``.
+    module : str
+        Module defining the function (inside the package).
+    name : str
+        The function.
+    """
+    import sys
+    import types
+
+    class CallablePackage(types.ModuleType):
+        def __call__(self, *args: Any, **kwargs: Any) -> Any:
+            return getattr(importlib.import_module(module), name)(*args, **kwargs)
+
+    CallablePackage.__call__.__doc__ = f"Call :func:`{module}.{name}` (imported on first use)."
+    sys.modules[package].__class__ = CallablePackage

@@ -72,6 +72,10 @@ class DriftResult:
         ``accel_bias_instability``; only the non-zero ones).
     metrics : dict
         Headline numbers (see :func:`headline`).
+
+    The derived curves (:attr:`horizontal`, :attr:`rms_horizontal`,
+    :attr:`worst_horizontal`, :attr:`noise_horizontal_sigma`) are computed on first
+    use and kept: the metrics, the figures and the exports all read them.
     """
 
     t: np.ndarray
@@ -84,12 +88,12 @@ class DriftResult:
     noise_cov: dict[str, np.ndarray]
     metrics: dict = field(default_factory=dict)
 
-    @property
+    @cached_property
     def horizontal(self) -> np.ndarray:
         """Deterministic horizontal position error magnitude, m, on the fine grid."""
         return np.hypot(self.nav[:, 6], self.nav[:, 7])
 
-    @property
+    @cached_property
     def noise_horizontal_sigma(self) -> np.ndarray:
         """1-sigma radial (DRMS) horizontal error from all noise sources, m, coarse grid."""
         tot = sum(

@@ -9,6 +9,7 @@
 * ``figures`` — heading, convergence and latitude figures; the accuracy study's sweeps
   and maps.
 * ``report`` — the north-finder report, for the one writer.
+* ``api`` — the notebook front door: ``northfind`` from a scenario, file or dict.
 * ``accuracy`` — the accuracy study: heading σ vs time, table rate, gyro grade and over
   heading × latitude; the gyro grade that meets a requirement (the study of
   ``analyses/p3_northfinder``).
@@ -35,6 +36,8 @@ __getattr__, __dir__ = lazy_exports(
         "build_report": "inserr.northfinder.report",
         "NorthfinderInputs": "inserr.northfinder.inputs",
         "northfinder_inputs": "inserr.northfinder.inputs",
+        "northfind": "inserr.northfinder.api",
+        "NorthfinderStudy": "inserr.northfinder.api",
         "AccuracyStudy": "inserr.northfinder.accuracy",
         "accuracy_study": "inserr.northfinder.accuracy",
         "against_published": "inserr.northfinder.published",
@@ -55,6 +58,8 @@ __all__ = [
     "build_report",
     "NorthfinderInputs",
     "northfinder_inputs",
+    "northfind",
+    "NorthfinderStudy",
     "AccuracyStudy",
     "accuracy_study",
     "against_published",

@@ -32,6 +32,9 @@ from inserr.scenario.schema import Scenario
 from inserr.schemes.vehicle_motion import Motion
 
 #: Field names of the north-finder dataclasses -> the scenario key they come from.
+#: Most samples one north-finder run simulates (~32 bytes each: about 2 GB).
+MAX_NORTHFINDER_SAMPLES = 6e7
+
 FIELD_KEYS = {
     "lat": "site.latitude",
     "height": "site.height",
@@ -163,6 +166,19 @@ def northfinder_inputs(scen: Scenario) -> NorthfinderInputs:
             "imu.arw" if grade.gyro_arw <= 0 else "imu.vrw",
             "the filter and the bound need non-zero white noise",
             "give a positive noise density",
+        )
+    # The simulation holds the sample grid of a whole run (8-byte indices and times,
+    # ~32 bytes per sample with the sensor outputs): refuse a run whose grid alone
+    # would pass ~2 GB, before any work, with the fix.
+    n_samples = scen.duration * instrument.sample_rate
+    if n_samples > MAX_NORTHFINDER_SAMPLES:
+        need_gb = 32.0 * n_samples / 1e9
+        raise InputError(
+            "scenario.duration",
+            f"{scen.duration:g} s at {instrument.sample_rate:g} Hz is {n_samples:.3g} samples "
+            f"(~{need_gb:.3g} GB), more than the {MAX_NORTHFINDER_SAMPLES:.3g} one run may hold",
+            f"give a duration of at most {MAX_NORTHFINDER_SAMPLES / instrument.sample_rate:g} s "
+            "or a lower imu.sample_rate",
         )
     hemisphere = 1 if scen.value("northfinder.hemisphere") == "north" else -1
     return NorthfinderInputs(

@@ -2,10 +2,14 @@
 
 * ``report`` — :class:`~inserr.output.report.Report` and its writer (``report.md``,
   ``report.html``, PNGs, ``results.json``; atomic, never over a user's directory);
-  strict JSON and atomic file writers.
+  strict JSON.
+* ``outdir`` — output directories that cannot hurt anyone: ownership manifests, write
+  probes, atomic file writes, leftovers of killed runs.
 * ``figure_style`` — sizes, resolution, fonts, grid and a colour per scheme; figures on
   :class:`matplotlib.figure.Figure`, never pyplot.
 * ``progress`` — progress bars on a terminal, silent otherwise.
+* ``results`` — the interface every study result offers a notebook (``metrics``,
+  ``to_dataframe``, ``budget``, ``plot``, Jupyter HTML) and its helpers.
 """
 
 from inserr.core.lazy import lazy_exports
@@ -14,13 +18,15 @@ __getattr__, __dir__ = lazy_exports(
     __name__,
     {
         "Report": "inserr.output.report",
-        "check_output_dir": "inserr.output.report",
+        "check_output_dir": "inserr.output.outdir",
         "check_report_dir": "inserr.output.report",
         "dumps": "inserr.output.report",
-        "write_bytes_atomic": "inserr.output.report",
+        "write_bytes_atomic": "inserr.output.outdir",
         "write_text_atomic": "inserr.output.report",
         "progress": "inserr.output.progress",
         "set_quiet": "inserr.output.progress",
+        "StudyResult": "inserr.output.results",
+        "budget_frame": "inserr.output.results",
     },
 )
 
@@ -33,4 +39,6 @@ __all__ = [
     "write_text_atomic",
     "progress",
     "set_quiet",
+    "StudyResult",
+    "budget_frame",
 ]

@@ -14,7 +14,8 @@ So every report has the same layout, heading style, figure style
   target and renames it into place (with the :data:`MARKER` file), so a failure
   never leaves a partial report directory behind and an existing report is replaced
   only by a complete one; :func:`check_report_dir` refuses, before any work, a
-  target that inserr did not write;
+  target holding anything inserr did not write (the marker's manifest lists every
+  file with its SHA-256; :mod:`inserr.output.outdir`);
 * :meth:`Report.write_into` writes the same files one by one, each atomically,
   into a directory that other scripts also write into (an analysis whose slow
   nonlinear part writes beside it).
@@ -24,8 +25,9 @@ Layout of a report directory::
     report.md        (REPORT.md for the analyses' write-ups) title, blocks, figure links
     report.html      the same, self-contained (PNG figures base64-embedded)
     <name>.png       one file per figure, named by the study
+    <name>.csv ...   data files a study attaches (e.g. timeseries.csv, budget.csv)
     results.json     the study's numbers (strict JSON, engineering units)
-    .inserr-report   marker: written by inserr, replaced as a whole (write only)
+    .inserr-report   marker: the manifest of the files above (name and SHA-256)
 """
 
 from __future__ import annotations
@@ -38,12 +40,27 @@ import os
 import re
 import shutil
 import tempfile
-from collections.abc import Callable
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from inserr.core.errors import InputError
+from inserr.output.outdir import (
+    TMP_TAG,
+    Manifest,
+    check_output_dir,
+    clean_leftovers,
+    foreign_entry,
+    old_name,
+    read_manifest,
+    sha256,
+    tag_temp_dir,
+    temp_prefix,
+    write_bytes_atomic,
+)
 
 
 def to_jsonable(obj: Any) -> Any:
@@ -255,15 +272,35 @@ class Report:
         """
         self.blocks.append(_Block("markdown", text.strip("\n")))
 
-    def figure(self, fig, name: str, caption: str = "") -> None:
+    def figure(self, fig, name: str, caption: str = "", *, crop: bool = True) -> None:
         """Add a matplotlib figure, saved as ``<name>.png`` and embedded in the HTML.
 
         The figure is finished in the inserr style (:func:`.figure_style.finish`) and
-        rendered at once; the caller's figure is not needed afterwards.
+        rendered at once; the caller's figure is not needed afterwards. ``crop=False``
+        renders the figure as laid out, without the tight crop (one drawing instead of
+        two: for figures whose layout already fits everything, see
+        :func:`.figure_style.png_bytes`).
         """
         from inserr.output.figure_style import finish, png_bytes
 
-        self.blocks.append(_Block("figure", (name, caption, png_bytes(finish(fig)))))
+        self.blocks.append(_Block("figure", (name, caption, png_bytes(finish(fig), crop=crop))))
+
+    def attach(self, name: str, data: str | bytes, caption: str = "") -> None:
+        """Add a data file (e.g. ``timeseries.csv``) written beside the report and linked.
+
+        Parameters
+        ----------
+        name : str
+            File name inside the report directory (no directory part).
+        data : str or bytes
+            Content; text is written as UTF-8.
+        caption : str
+            What the file holds (shown with the link).
+        """
+        if not name or "/" in name or "\\" in name or name.startswith("."):
+            raise ValueError(f"attachment name must be a plain file name, got {name!r}")
+        payload = data.encode("utf-8") if isinstance(data, str) else bytes(data)
+        self.blocks.append(_Block("file", (name, caption, payload)))
 
     # --- rendering ------------------------------------------------------------
     def markdown(self) -> str:
@@ -286,6 +323,9 @@ class Report:
                 out += [f"![{caption or name}]({name}.png)", ""]
                 if caption:
                     out += [f"*{caption}*", ""]
+            elif b.kind == "file":
+                name, caption, _ = b.payload
+                out += [f"- [{name}]({name})" + (f": {caption}" if caption else ""), ""]
         return "\n".join(out)
 
     def html(self) -> str:
@@ -294,9 +334,14 @@ class Report:
         out = [
             "<!DOCTYPE html><html><head><meta charset='utf-8'>",
             f"<title>{esc(self.title)}</title>",
-            "<style>body{font-family:sans-serif;max-width:60em;margin:auto;padding:1em}"
+            # Wide enough for an 11 in figure at its own 110 dpi (1210 px): figures show
+            # at 100 % on a usual screen, so their 7-10 pt text stays legible.
+            "<style>body{font-family:sans-serif;max-width:1300px;margin:auto;padding:1em}"
+            "figure{margin:1em 0}"
             "table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px;"
-            "text-align:right}th{background:#eee}img{max-width:100%}</style>",
+            "text-align:right}th{background:#eee}td:first-child{text-align:left}"
+            "img{max-width:100%;height:auto}figcaption{font-style:italic;margin:0.3em 0 1em}"
+            "</style>",
             "</head><body>",
             f"<h1>{esc(self.title)}</h1>",
         ]
@@ -315,6 +360,10 @@ class Report:
                     f"<figure><img alt='{esc(name)}' src='data:image/png;base64,{data}'>"
                     f"<figcaption>{esc(caption)}</figcaption></figure>"
                 )
+            elif b.kind == "file":
+                name, caption, _ = b.payload
+                text = f": {esc(caption)}" if caption else ""
+                out.append(f"<p class='file'><a href='{esc(name)}'>{esc(name)}</a>{text}</p>")
         out.append("</body></html>")
         return "\n".join(out)
 
@@ -339,6 +388,9 @@ class Report:
             if b.kind == "figure":
                 name, _, png = b.payload
                 out[f"{name}.png"] = png
+            elif b.kind == "file":
+                name, _, data = b.payload
+                out[name] = data
         out["results.json"] = dumps(self.results).encode("utf-8")
         return out
 
@@ -348,10 +400,12 @@ class Report:
         Unlike :meth:`write`, other files already in the directory are left alone
         (an analysis directory that several scripts write into); the same files as
         :meth:`write` are written, without the marker (the directory is not
-        replaced as a whole).
+        replaced as a whole). Temporaries of these files left by a killed run are
+        removed first (:func:`inserr.output.outdir.clean_leftovers`).
         """
         target = Path(out_dir).resolve()
         files = self.files(markdown_name)
+        clean_leftovers(target, files)
         # The Markdown last: it is the write-up's index, updated once all it links is there.
         for name in sorted(files, key=lambda n: n == markdown_name):
             write_bytes_atomic(target / name, files[name])
@@ -360,20 +414,28 @@ class Report:
     def write(self, out_dir: str | os.PathLike, markdown_name: str = "report.md") -> Path:
         """Write the complete report directory atomically and return its path.
 
-        Everything is rendered into a temporary sibling directory first; only when
-        that succeeds is it renamed to ``out_dir`` (replacing an older inserr report;
-        any other existing, non-empty directory is refused, see
-        :func:`check_report_dir`).
+        The target is checked first (:func:`check_report_dir`: new, empty, or an
+        earlier inserr report whose every file is still as inserr wrote it; writable).
+        Everything is rendered into a temporary sibling ``.<name>.tmp-<pid>-*`` (tagged
+        as inserr's) with the marker and its manifest (every file and its SHA-256);
+        only when that succeeds is it renamed to ``out_dir``, replacing an older
+        report. Leftovers of a killed earlier run beside the target are removed first
+        (:func:`inserr.output.outdir.clean_leftovers`).
         ``markdown_name`` names the Markdown file (analyses use ``REPORT.md``).
         """
         target = check_report_dir(out_dir)
         target.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.parent))
+        clean_leftovers(target.parent, [target.name], MARKER)
+        tmp = Path(tempfile.mkdtemp(prefix=temp_prefix(target.name), dir=target.parent))
         try:
+            tag_temp_dir(tmp)  # proves the directory is inserr's if this run is killed
             tmp.chmod(0o755)  # mkdtemp makes it private; a report is meant to be shared
-            for name, data in self.files(markdown_name).items():
+            files = self.files(markdown_name)
+            for name, data in files.items():
                 (tmp / name).write_bytes(data)
-            (tmp / MARKER).write_text("written by inserr; replaced as a whole on rewrite\n")
+            manifest = Manifest("report", {name: sha256(data) for name, data in files.items()})
+            (tmp / MARKER).write_text(manifest.text(), encoding="utf-8")
+            (tmp / TMP_TAG).unlink()  # from here on the marker's manifest proves it
             replace_dir(tmp, target)
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
@@ -381,94 +443,47 @@ class Report:
         return target
 
 
-#: Written into every report directory, so that only inserr's own reports are replaced.
+#: Written into every report directory: its JSON manifest lists every file of the report
+#: with its SHA-256 (:class:`inserr.output.outdir.Manifest`), so that only inserr's own
+#: reports, unchanged, are replaced.
 MARKER = ".inserr-report"
+
+#: Files a report written before manifests existed may hold (its marker was one line of
+#: text); anything else in such a directory is the user's.
+_LEGACY_REPORT_FILES = re.compile(
+    r"^(report\.md|REPORT\.md|report\.html|results\.json|[^/]+\.png)$"
+)
+
+
+def _legacy_report_file(path: Path) -> bool:
+    return path.is_file() and not path.is_symlink() and bool(_LEGACY_REPORT_FILES.match(path.name))
 
 
 def is_report_dir(path: Path) -> bool:
-    """Whether ``path`` is a directory that inserr wrote (safe to replace as a whole).
+    """Whether ``path`` is a report directory inserr wrote and nobody changed since.
 
-    A directory counts when it holds the marker file, or (reports written before the
-    marker existed) a ``results.json`` beside a ``report.md`` or ``REPORT.md``.
+    It must hold the :data:`MARKER` and nothing its manifest does not list (each
+    file with the SHA-256 recorded); a marker from before manifests vouches only for
+    the files a report had then (Markdown, HTML, ``results.json``, PNGs).
     """
-    return path.is_dir() and (
-        (path / MARKER).is_file()
-        or (
-            (path / "results.json").is_file()
-            and ((path / "report.md").is_file() or (path / "REPORT.md").is_file())
-        )
+    return (
+        path.is_dir()
+        and read_manifest(path, MARKER) is not None
+        and foreign_entry(path, MARKER, legacy=_legacy_report_file) is None
     )
 
 
-def check_output_dir(
+def check_report_dir(
     out_dir: str | os.PathLike,
-    field: str,
-    is_ours: Callable[[Path], bool],
-    what: str,
-    fix: str,
+    field: str = "out",
+    inputs: Iterable[str | os.PathLike] = (),
 ) -> Path:
-    """Check, before any work, that inserr may write into ``out_dir``.
-
-    The target must be new, empty, or one inserr wrote before (``is_ours``): never
-    the working directory or one of its parents, a file, a directory holding
-    anything else, or a path through a file or an unwritable parent.
-
-    Parameters
-    ----------
-    out_dir : str or path
-        The output directory the user asked for.
-    field : str
-        Name of the flag or key reported in the error message.
-    is_ours : callable
-        ``is_ours(path)`` is True for a non-empty directory inserr may reuse.
-    what : str
-        What the directory is meant to be, for the message (e.g. "an inserr report").
-    fix : str
-        How to fix a refused directory.
-
-    Returns
-    -------
-    Path
-        The resolved target.
-
-    Raises
-    ------
-    InputError
-        If writing there would destroy files inserr did not write, or cannot succeed.
-    """
-    from inserr.core.errors import InputError
-
-    target = Path(out_dir).expanduser().resolve()
-    cwd = Path.cwd().resolve()
-    if target == cwd or target in cwd.parents:
-        raise InputError(
-            field,
-            f"{out_dir!s} is the working directory or one of its parents",
-            "name a new directory, e.g. my_report",
-        )
-    if target.exists() and not target.is_dir():
-        raise InputError(field, f"{out_dir!s} exists and is not a directory", "name a directory")
-    if target.is_dir() and any(target.iterdir()) and not is_ours(target):
-        raise InputError(field, f"{out_dir!s} exists and is not {what} directory", fix)
-    for parent in target.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise InputError(
-                    field, f"{parent} is a file, so {out_dir!s} cannot be created", "fix the path"
-                )
-            if not os.access(parent, os.W_OK | os.X_OK):
-                raise InputError(
-                    field, f"no permission to write in {parent}", "choose another path"
-                )
-            break
-    return target
-
-
-def check_report_dir(out_dir: str | os.PathLike, field: str = "out") -> Path:
     """Check, before any work, that a report can be written to ``out_dir``.
 
     :meth:`Report.write` replaces the target directory as a whole, so it must be
-    new, empty or an earlier inserr report (:func:`check_output_dir`).
+    new, empty or an earlier inserr report holding only what inserr wrote, unchanged
+    (:func:`is_report_dir`); it must not hold the run's ``inputs``; and a probe file
+    must be creatable in it and beside it (:func:`check_output_dir`).
 
     Parameters
     ----------
@@ -476,6 +491,8 @@ def check_report_dir(out_dir: str | os.PathLike, field: str = "out") -> Path:
         The report directory the user asked for.
     field : str
         Name of the flag or key reported in the error message.
+    inputs : iterable of path
+        Files the run reads (the scenario), which must not be inside ``out_dir``.
 
     Returns
     -------
@@ -485,40 +502,44 @@ def check_report_dir(out_dir: str | os.PathLike, field: str = "out") -> Path:
     return check_output_dir(
         out_dir,
         field,
-        is_report_dir,
+        lambda p: False,
         "an inserr report",
-        "name a new directory, or remove that one first (a report replaces it as a whole)",
+        "name a new directory, or move that file out first "
+        "(a report replaces its directory as a whole)",
+        marker=MARKER,
+        legacy=_legacy_report_file,
+        replaces_whole=True,
+        inputs=inputs,
     )
 
 
 def replace_dir(src: Path, target: Path) -> None:
-    """Move a finished directory ``src`` to ``target``, replacing it if it exists."""
+    """Move a finished report directory ``src`` to ``target``, replacing an earlier report.
+
+    The earlier report is checked once more just before (a file added to it while
+    this run worked is never deleted: InputError), renamed aside
+    (``.<name>.old-<pid>-*``), and removed once ``src`` is in place.
+    """
     if target.exists():
-        old = target.with_name(f".{target.name}.old-{os.getpid()}")
-        os.replace(target, old)
+        bad = foreign_entry(target, MARKER, legacy=_legacy_report_file)
+        if bad is not None:
+            name, why = bad
+            raise InputError(
+                "out",
+                f"{target} now holds {name}, {why}",
+                "move that file out and rerun (nothing was replaced)",
+            )
+        old = target.with_name(old_name(target.name))
+        try:
+            os.replace(target, old)
+        except OSError as exc:  # checked before any work; this is a last line of defence
+            raise InputError(
+                "out", f"cannot replace {target} ({exc.strerror})", "name a new directory"
+            ) from None
         os.replace(src, target)
         shutil.rmtree(old, ignore_errors=True)
     else:
         os.replace(src, target)
-
-
-def write_bytes_atomic(path: str | os.PathLike, data: bytes) -> None:
-    """Write a file atomically (temporary file in the same directory, then rename).
-
-    The file ends up world-readable (0644), like any other output.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        os.chmod(tmp, 0o644)  # mkstemp makes it private; results are meant to be read
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def write_text_atomic(path: str | os.PathLike, text: str) -> None:

@@ -151,6 +151,9 @@ FLAGS: dict[str, Flag] = {
     # [output]
     "step": _F("output.step", "s", "output step of the deterministic run"),
     "covariance-step": _F("output.covariance_step", "s", "output step of covariance results"),
+    "export-step": _F(
+        "output.export_step", "s", "row step of the exported time series (timeseries.csv)"
+    ),
     "substep": _F("output.substep", "s", "sub-step of continuous motion"),
     "vertical": _F("output.vertical", None, "vertical channel"),
     "engine": _F("output.engine", None, "drift engine: fast, or exact (step by step, reference)"),
@@ -256,6 +259,16 @@ CONTROLS: dict[str, str] = {
     "no-plots": "no summary plots for a sweep",
 }
 
+#: The flags of ``inserr imu-budget``, the one command that reads a recording, not a
+#: scenario: they describe the file and the fit and set no scenario key. ``--rate`` is
+#: there the recording's sample rate (Hz), as issue 16 spells the command.
+RECORDING_FLAGS: dict[str, str] = {
+    "rate": "sample rate of the recording, Hz",
+    "gyro-unit": "unit of the recording's gyro columns",
+    "accel-unit": "unit of the recording's accelerometer columns",
+    "confidence": "level of the fitted terms' confidence intervals",
+}
+
 #: Flags that repeat (each occurrence adds one list item).
 REPEATED = frozenset({"param"})
 
@@ -278,7 +291,7 @@ IMU_FLAGS = (
 INITIAL = ("initial-attitude", "initial-velocity", "initial-position")
 MOTION = ("heading-convention", "heading", "pitch", "roll", "turn-rate", "yaw-swing")
 SCHEME = ("scheme", "rate", "stop", "start", "reversal", "delta", "variant")
-OUTPUT = ("step", "covariance-step", "substep", "vertical", "engine")
+OUTPUT = ("step", "covariance-step", "export-step", "substep", "vertical", "engine")
 #: The scenario flags of ``drift`` (and ``compare``, ``validate``, ``sweep``).
 DRIFT = ("duration", *SITE, *IMU_FLAGS, *INITIAL, *MOTION, *SCHEME, *OUTPUT)
 
@@ -401,6 +414,11 @@ def _flag_value(name: str, value: Any) -> Any:
             return float(str(value).strip())
         except ValueError:
             raise InputError(where, f"{value!r} is not a number") from None
+    if kind in ("list", "int-list") and name not in REPEATED:
+        # "a,,b" or a trailing comma: refuse rather than silently drop (or run the
+        # base scheme for) the empty item.
+        if any(not s.strip() for s in str(value).split(",")):
+            raise InputError(where, f"empty item in {value!r}", "remove the extra comma")
     if kind == "list":
         return list(value) if name in REPEATED else _split(value)
     if kind == "int-list":
@@ -446,10 +464,37 @@ def flags_to_dict(args: argparse.Namespace, names: Iterable[str] | None = None) 
 
 def merge(base: dict, over: dict) -> dict:
     """Section-wise merge of two nested scenario tables (``over`` wins)."""
+    for k, v in base.items():
+        if not isinstance(v, dict):  # ``site = "x"``: validated here, before the merge
+            raise InputError(k, "must be a table ([section])", f"write [{k}] and its keys")
     out = {k: dict(v) for k, v in base.items()}
+    _drop_replaced_options(out, over)
     for section, table in over.items():
         out.setdefault(section, {}).update(table)
     return out
+
+
+def _drop_replaced_options(base: dict, over: dict) -> None:
+    """A flag that replaces the file's scheme or motion type replaces its options too.
+
+    The file's ``[[scheme.steps]]`` belong to its custom scheme; under ``--scheme
+    four-position`` they are dropped rather than refused as keys the scheme ignores
+    (which they are in a file that names a scheme that does not read them).
+    """
+    from inserr.scenario.schema import _MOTION_KEY_TYPES, _SCHEME_OPTION_KEYS, _options_for
+
+    name = over.get("scheme", {}).get("name")
+    sch = base.get("scheme", {})
+    if name is not None and name != sch.get("name"):
+        for key, opt in _SCHEME_OPTION_KEYS.items():
+            if key not in over.get("scheme", {}) and opt not in _options_for(name, {opt: 1}):
+                sch.pop(key, None)
+    kind = over.get("motion", {}).get("type")
+    mo = base.get("motion", {})
+    if kind is not None and kind != mo.get("type"):
+        for key, needs in _MOTION_KEY_TYPES.items():
+            if key not in over.get("motion", {}) and needs != kind:
+                mo.pop(key, None)
 
 
 def scenario_from_args(args: argparse.Namespace, study: str = "drift") -> Scenario:

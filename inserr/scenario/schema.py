@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import copy
 import math
+import os
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -33,7 +34,7 @@ import numpy as np
 from inserr.core.earth import Site
 from inserr.core.errors import InputError
 from inserr.core.imu import ImuErrors, InitialErrors
-from inserr.core.units import DEG, parse_quantity
+from inserr.core.units import DAY, DEG, DEG_PER_HOUR, DEG_PER_SQRT_HOUR, MICRO_G, parse_quantity
 from inserr.schemes.open_loop import SCHEME_STARTS
 from inserr.schemes.vehicle_motion import (
     HEADING_CONVENTIONS,
@@ -144,6 +145,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "output": {
         "step": _K("time", None, "1 s", "output step of the deterministic run"),
         "covariance_step": _K("time", None, "60 s", "output step of covariance results"),
+        "export_step": _K(
+            "time", None, "60 s", "row step of timeseries.csv and to_dataframe (x output.step)"
+        ),
         "substep": _K("time", None, "1 s", "sub-step of continuous motion (exact engine)"),
         "vertical": _K("str", None, "clamped", "vertical channel"),
         "engine": _K("str", None, "fast", "drift engine: fast | exact (step by step)"),
@@ -200,6 +204,92 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "parameters": _K("list", None, [], "swept parameters, each NAME=V1,V2,..."),
     },
 }
+
+#: Physical range of each quantity key: dotted key -> (low, high, unit shown, why), in
+#: SI; every component must lie in [low, high]. Values outside are not errors an
+#: instrument could have, or lie where the model or the memory of one run cannot
+#: follow; ``docs/scenarios.md`` lists them. (Latitude: strictly inside +-90 deg,
+#: checked by :class:`~inserr.core.earth.Site`.)
+RANGES: dict[str, tuple[float, float, str, str]] = {
+    "scenario.duration": (1.0, 366 * DAY, "s", "1 s to one year"),
+    "site.longitude": (-360 * DEG, 360 * DEG, "deg", "one turn either way"),
+    "site.height": (-11_000.0, 100_000.0, "m", "ocean floor to the edge of space"),
+    "imu.gyro_bias": (-1e4 * DEG_PER_HOUR, 1e4 * DEG_PER_HOUR, "deg/h", "MEMS grade and better"),
+    "imu.accel_bias": (-1e5 * MICRO_G, 1e5 * MICRO_G, "ug", "0.1 g at most"),
+    "imu.gyro_scale_factor": (-0.1, 0.1, "ppm", "10 % at most"),
+    "imu.accel_scale_factor": (-0.1, 0.1, "ppm", "10 % at most"),
+    "imu.gyro_misalignment": (-10 * DEG, 10 * DEG, "arcsec", "10 deg at most"),
+    "imu.accel_misalignment": (-10 * DEG, 10 * DEG, "arcsec", "10 deg at most"),
+    "imu.arw": (0.0, 100 * DEG_PER_SQRT_HOUR, "deg/sqrt(h)", "non-negative, MEMS grade"),
+    "imu.vrw": (0.0, 1e5 * MICRO_G, "ug/sqrt(Hz)", "non-negative, MEMS grade"),
+    "imu.gyro_bias_instability": (0.0, 1e4 * DEG_PER_HOUR, "deg/h", "non-negative"),
+    "imu.accel_bias_instability": (0.0, 1e5 * MICRO_G, "ug", "non-negative"),
+    "imu.gyro_correlation_time": (1e-3, 1e9, "s", "positive"),
+    "imu.accel_correlation_time": (1e-3, 1e9, "s", "positive"),
+    "imu.sample_rate": (1e-3, 1e5, "Hz", "positive, at most 100 kHz"),
+    "initial.attitude": (-10 * DEG, 10 * DEG, "arcsec", "small angles: 10 deg at most"),
+    "initial.velocity": (-1000.0, 1000.0, "m/s", "1 km/s at most"),
+    "initial.position": (-1e6, 1e6, "m", "1000 km at most"),
+    "motion.heading": (-360 * DEG, 360 * DEG, "deg", "one turn either way"),
+    "motion.pitch": (-90 * DEG, 90 * DEG, "deg", "+-90 deg"),
+    "motion.roll": (-180 * DEG, 180 * DEG, "deg", "+-180 deg"),
+    "motion.amplitude": (-100 * DEG, 100 * DEG, "deg/s", "100 deg/s at most"),
+    "motion.period": (1.0, 366 * DAY, "s", "1 s to one year"),
+    "motion.rate": (-100 * DEG, 100 * DEG, "deg/s", "100 deg/s at most"),
+    "scheme.rate": (-1000 * DEG, 1000 * DEG, "deg/s", "1000 deg/s at most"),
+    "scheme.stop": (0.0, 366 * DAY, "s", "non-negative, one year at most"),
+    "scheme.reversal": (0.0, 366 * DAY, "s", "non-negative, one year at most"),
+    "scheme.decision_rate": (1e-3, 1e5, "Hz", "positive, at most 100 kHz"),
+    "scheme.mounting": (-360 * DEG, 360 * DEG, "deg", "one turn either way"),
+    "output.step": (1e-3, DAY, "s", "1 ms to 1 day"),
+    "output.covariance_step": (1e-3, DAY, "s", "1 ms to 1 day"),
+    "output.substep": (1e-3, DAY, "s", "1 ms to 1 day"),
+    "alignment.zupt_rate": (1e-3, 1e5, "Hz", "positive"),
+    "alignment.zupt_sigma": (1e-9, 1e3, "m/s", "positive"),
+    "alignment.position_sigma": (1e-6, 1e7, "m", "positive"),
+    "calibration.settle": (0.0, DAY, "s", "non-negative, one day at most"),
+    "calibration.positioning_error": (0.0, 10 * DEG, "arcsec", "non-negative, 10 deg at most"),
+    "northfinder.filter_period": (1e-3, DAY, "s", "positive, one day at most"),
+    "validate.chunk": (1.0, 366 * DAY, "s", "1 s to one year"),
+}
+
+#: Number keys' ranges, as :data:`RANGES` (no unit).
+NUMBER_RANGES: dict[str, tuple[float, float, str]] = {
+    "scenario.seed": (0, 2**63 - 1, "0 to 2**63 - 1"),
+    "scenario.runs": (1, 1_000_000, "1 to 1e6"),
+    "scheme.delta": (1e-9, 1.0, "a fraction in (0, 1]"),
+    "validate.confidence": (1e-6, 1 - 1e-6, "a probability in (0, 1)"),
+    "calibration.top": (1, 10_000, "1 to 1e4"),
+}
+
+
+def _check_range(fld: str, value: Any) -> Any:
+    """``value`` if every component lies in the key's documented range, else InputError."""
+    if fld in NUMBER_RANGES:
+        lo, hi, text = NUMBER_RANGES[fld]
+        if not lo <= value <= hi:
+            raise InputError(fld, f"{value!r} is out of range ({text})", f"give {text}")
+        return value
+    rng = RANGES.get(fld)
+    if rng is None or value is None:
+        return value
+    lo, hi, unit, why = rng
+    arr = np.atleast_1d(np.asarray(value, dtype=float))
+    bad = arr[(arr < lo) | (arr > hi) | ~np.isfinite(arr)]
+    if bad.size:
+        from inserr.core.units import UNITS
+
+        scale = UNITS_SCALE.get(unit) or next(u[unit] for u in UNITS.values() if unit in u)
+        raise InputError(
+            fld,
+            f"{bad[0] / scale:.6g} {unit} is out of range ({why})",
+            f"give a value from {lo / scale:.6g} to {hi / scale:.6g} {unit}",
+        )
+    return value
+
+
+#: Display scales of :data:`RANGES` units that several kinds share.
+UNITS_SCALE: dict[str, float] = {"s": 1.0, "m": 1.0, "Hz": 1.0, "m/s": 1.0, "ppm": 1e-6}
 
 #: Keys whose value is one of a few words.
 CHOICES: dict[str, tuple[str, ...]] = {
@@ -485,11 +575,11 @@ def _value(spec: Key, fld: str, raw: Any) -> Any:
     if kind == "int":
         if isinstance(raw, bool) or not isinstance(raw, int):
             raise InputError(fld, f"expected an integer, got {raw!r}")
-        return raw
+        return _check_range(fld, raw)
     if kind == "float":
         if not _is_number(raw) or not math.isfinite(raw):
             raise InputError(fld, f"expected a finite number, got {raw!r}")
-        return float(raw)
+        return _check_range(fld, float(raw))
     if kind == "int-list":
         if not isinstance(raw, list) or not all(
             isinstance(v, int) and not isinstance(v, bool) for v in raw
@@ -503,7 +593,10 @@ def _value(spec: Key, fld: str, raw: Any) -> Any:
     if kind == "list":
         if not isinstance(raw, list) or not all(isinstance(v, str) for v in raw):
             raise InputError(fld, f"expected a list of names, got {raw!r}")
-        return tuple(raw)
+        for i, v in enumerate(raw):
+            if not v.strip():
+                raise InputError(f"{fld}[{i}]", "empty item", "remove it or give a name")
+        return tuple(v.strip() for v in raw)
     if kind == "table-list":
         if not isinstance(raw, list) or not all(isinstance(v, dict) for v in raw):
             raise InputError(fld, "expected an array of tables ([[scheme.steps]])")
@@ -511,6 +604,8 @@ def _value(spec: Key, fld: str, raw: Any) -> Any:
     if size == "list":
         # An array of quantities (["0 deg", "180 deg"]) or one string ("0, 180 deg").
         if isinstance(raw, str):
+            if any(not v.strip() for v in raw.split(",")):
+                raise InputError(fld, f"empty item in {raw!r}", "remove the extra comma")
             n = len(raw.split(","))
             return tuple(float(v) for v in np.atleast_1d(parse_quantity(raw, kind, fld, size=n)))
         if not isinstance(raw, list):
@@ -520,7 +615,7 @@ def _value(spec: Key, fld: str, raw: Any) -> Any:
         )
     if _is_number(raw) and raw == 0:
         raw = f"0 {_first_unit(kind)}"  # a bare 0 needs no unit
-    return parse_quantity(raw, kind, fld, size=size)
+    return _check_range(fld, parse_quantity(raw, kind, fld, size=size))
 
 
 def _first_unit(kind: str) -> str:
@@ -537,11 +632,16 @@ def read_scenario_file(path: str | Path) -> tuple[dict, Path]:
     InputError
         Missing file, not UTF-8, malformed TOML.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path: expected a scenario file path, got {type(path).__name__}")
     p = Path(path)
+    if p.is_dir():
+        raise InputError(str(path), "is a directory, not a scenario file", "name a .toml file")
     if not p.is_file():
         raise InputError(str(path), "scenario file not found", "check the path")
     try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
+        # utf-8-sig: a byte-order mark (Windows editors write one) is dropped.
+        data = tomllib.loads(p.read_text(encoding="utf-8-sig"))
     except UnicodeDecodeError as exc:
         raise InputError(
             str(path),
@@ -610,6 +710,8 @@ def scenario_from_dict(
     Scenario
         Every key validated; :meth:`Scenario.value` gives any of them in SI.
     """
+    if not isinstance(data, Mapping):
+        raise TypeError(f"data: expected a dict of scenario sections, got {type(data).__name__}")
     if study not in STUDY_DEFAULTS:  # a programming error, not bad input
         raise ValueError(f"unknown study {study!r}; use one of {', '.join(STUDY_DEFAULTS)}")
     raw: dict[str, dict[str, Any]] = {}
@@ -697,9 +799,17 @@ def scenario_from_dict(
             raise InputError("scheme.rate", "table rate must be > 0", "give e.g. 6 deg/s")
         if sh["stop"] < 0:
             raise InputError("scheme.stop", "stop time must be >= 0", "give e.g. 300 s")
-    for key in ("step", "covariance_step", "substep"):
+    for key in ("step", "covariance_step", "substep", "export_step"):
         if out[key] <= 0:
             raise InputError(f"output.{key}", "must be > 0", "give e.g. 1 s")
+    ratio = out["export_step"] / out["step"]
+    if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-9 * ratio:
+        # The exported rows are samples of the deterministic run, never interpolations.
+        raise InputError(
+            "output.export_step",
+            f"{out['export_step']:g} s is not a multiple of output.step ({out['step']:g} s)",
+            f"use a multiple of it, e.g. {max(round(ratio), 1) * out['step']:g} s",
+        )
     if study == "drift":
         # The engine keeps every output sample (and, under continuous motion, every
         # sub-step segment) in memory: about 1.3 MB per hour at 1 s, so 30 days at 1 s
@@ -766,7 +876,90 @@ def scenario_from_dict(
                 if "unknown scheme" not in exc.problem:
                     raise
                 raise InputError("compare.schemes", exc.problem, exc.fix) from None
+        _refuse_ignored_scheme_keys(
+            _changed(raw, "scheme", values, defaults), (scen.scheme_name, *scen.compare)
+        )
+    _refuse_ignored_motion_keys(_changed(raw, "motion", values, defaults), mo)
     return scen
+
+
+def _changed(
+    raw: Mapping[str, Mapping[str, Any]],
+    section: str,
+    values: Mapping[str, Any],
+    defaults: Mapping[str, Any],
+) -> set[str]:
+    """The keys of ``section`` given with a value other than their default.
+
+    A key given at its default changes nothing, so it is harmless wherever it is
+    ignored (the reference example in ``docs/scenarios.md`` lists every key).
+    """
+    out = set()
+    for key in raw.get(section, {}):
+        dotted = f"{section}.{key}"
+        spec = SCHEMA[section][key]
+        default = _value(spec, dotted, defaults.get(dotted, spec.default))
+        if not np.array_equal(
+            np.asarray(values[dotted], dtype=object), np.asarray(default, dtype=object)
+        ):
+            out.add(key)
+    return out
+
+
+#: Scheme keys only some schemes read: key -> option name in :func:`_options_for`.
+_SCHEME_OPTION_KEYS = {
+    "reversal": "reversal",
+    "delta": "delta",
+    "variant": "variant",
+    "decision_rate": "f",
+    "steps": "steps",
+}
+
+
+def _refuse_ignored_scheme_keys(given: set[str], names: tuple[str, ...]) -> None:
+    """InputError for a ``[scheme]`` key that none of the schemes run would read."""
+    for key, opt in _SCHEME_OPTION_KEYS.items():
+        if key in given and not any(opt in _options_for(n, {opt: 1}) for n in names):
+            users = [n for n in _SCHEME_KEY_USERS if opt in _options_for(n, {opt: 1})]
+            raise InputError(
+                f"scheme.{key}",
+                f"is ignored by scheme {', '.join(repr(n) for n in names)}",
+                f"remove it, or choose a scheme that reads it ({', '.join(users)})",
+            )
+
+
+#: The schemes with options of their own (for the fix of an ignored key).
+_SCHEME_KEY_USERS = ("continuous", "flexible-two-position", "nulling-two-position", "custom")
+
+#: Motion keys only one motion type reads.
+_MOTION_KEY_TYPES = {
+    "amplitude": "yaw-swing",
+    "period": "yaw-swing",
+    "rate": "turn",
+    "file": "heading-history",
+}
+
+
+def _refuse_ignored_motion_keys(given: set[str], mo: Mapping[str, Any]) -> None:
+    """InputError for a ``[motion]`` key the motion type ignores, or a yaw swing of 0."""
+    kind = mo["type"]
+    for key, needs in _MOTION_KEY_TYPES.items():
+        if key in given and kind != needs:
+            raise InputError(
+                f"motion.{key}",
+                f"is ignored by motion type {kind!r} (only {needs!r} reads it)",
+                f"remove it, or set motion.type = {needs!r}",
+            )
+    if kind == "heading-history" and "heading" in given:
+        raise InputError(
+            "motion.heading",
+            "is ignored by motion type 'heading-history' (the file gives the heading)",
+            "remove it",
+        )
+    if kind == "yaw-swing" and mo["amplitude"] == 0:
+        raise InputError(
+            "motion.amplitude", "a yaw swing needs a non-zero amplitude", "give e.g. 2 deg/s"
+        )
 
 
 def _motion(mo: dict, base_dir: Path | None) -> Motion:
@@ -838,3 +1031,85 @@ def _steps(rows: list[dict]):
             raise InputError(f"{fld}.rotation_time", "must be > 0")
         steps.append(Step(gimbal, angle, dwell, rt, str(row.get("label", f"P{i + 1}"))))
     return steps
+
+
+def as_scenario(obj: Any, study: str = "drift") -> Scenario:
+    """A scenario from what a notebook user has at hand: a Scenario, a file or a dict.
+
+    Parameters
+    ----------
+    obj : Scenario, str, Path or mapping
+        A validated scenario (re-read with ``study``'s defaults if it was built for
+        another study), the path of a TOML file, or a nested dict as a file holds it.
+    study : str
+        Whose defaults fill the absent keys (a key of :data:`STUDY_DEFAULTS`).
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    InputError
+        A bad file or value (as :func:`load_scenario`), or an object of another type.
+    """
+    if isinstance(obj, Scenario):
+        if obj.study == study:
+            return obj
+        return scenario_from_dict(obj.raw, obj.base_dir, study=study, analysis=obj.analysis)
+    if isinstance(obj, (str, Path)):
+        return load_scenario(obj, study=study)
+    if isinstance(obj, Mapping):
+        return scenario_from_dict(dict(obj), study=study)
+    raise InputError(
+        "scenario",
+        f"expected a Scenario, a TOML file path or a dict, got {type(obj).__name__}",
+        "pass inserr.load_scenario(path), the path itself, or a dict of sections",
+    )
+
+
+def resolved_scenario(scen: Scenario) -> dict[str, dict[str, Any]]:
+    """Every key the scenario's study reads, as written or defaulted, units as text.
+
+    The sections the drift engine reads (:data:`_CORE_SECTIONS`) in full, plus every
+    other section the scenario wrote; each value as the file holds it (a string with
+    its unit), the default filling each absent key. Together with
+    :func:`scenario_digest` this says exactly which inputs produced a report.
+
+    Parameters
+    ----------
+    scen : Scenario
+
+    Returns
+    -------
+    dict
+        Section -> key -> value (JSON-ready: strings, numbers, booleans, lists).
+    """
+    out: dict[str, dict[str, Any]] = {}
+    for section, keys in SCHEMA.items():
+        given = scen.raw.get(section, {})
+        if section not in _CORE_SECTIONS and not given:
+            continue
+        table = {}
+        for key in keys:
+            value = given[key] if key in given else study_default(f"{section}.{key}", scen.study)
+            if value is not None:
+                table[key] = copy.deepcopy(value)
+        out[section] = table
+    if scen.raw.get(ANALYSIS):
+        out[ANALYSIS] = copy.deepcopy(scen.raw[ANALYSIS])
+    return out
+
+
+def scenario_digest(scen: Scenario) -> str:
+    """SHA-256 (hex) of :func:`resolved_scenario` as canonical JSON (sorted keys).
+
+    The same inputs give the same digest whether written in a file or given by
+    flags, and a key written with its default text hashes like an absent one. (A
+    heading-history file is named by its path; its content is not hashed.)
+    """
+    import hashlib
+    import json
+
+    text = json.dumps(resolved_scenario(scen), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()

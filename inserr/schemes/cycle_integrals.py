@@ -335,4 +335,18 @@ def scenario_cycle(scen) -> tuple[TableScheme, Motion, str]:
         )
     if type(m) is not Motion:
         desc += f" (the scenario's {m.name} motion held at its t = 0 attitude)"
+    steps = scen.scheme_options.get("steps") if scen.scheme_name == "custom" else None
+    if steps:
+        # A cycle integral means something only over a cycle that brings the table
+        # back to its start: each gimbal's turns must add up to whole revolutions.
+        for gimbal in ("outer", "inner"):
+            net = sum(s.angle for s in steps if s.gimbal == gimbal)
+            turns = net / (2.0 * math.pi)
+            if abs(turns - round(turns)) > 1e-9:
+                raise InputError(
+                    "scheme.steps",
+                    f"the custom cycle turns the {gimbal} gimbal by {math.degrees(net):g} deg "
+                    "in all, so it does not return to its start",
+                    "make each gimbal's angles add up to a multiple of 360 deg",
+                )
     return scen.scheme(), base, desc

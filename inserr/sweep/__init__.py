@@ -6,9 +6,10 @@
 * ``runner`` — running the points locally or on a dask.distributed cluster
   (:func:`~inserr.sweep.runner.run_sweep`).
 * ``figures`` — summary figures chosen by the number of swept parameters.
+* ``api`` — the notebook front door: calling the package, ``inserr.sweep(scenario, params)``.
 """
 
-from inserr.core.lazy import lazy_exports
+from inserr.core.lazy import callable_package, lazy_exports
 
 __getattr__, __dir__ = lazy_exports(
     __name__,
@@ -17,7 +18,17 @@ __getattr__, __dir__ = lazy_exports(
         "build_grid": "inserr.sweep.grid",
         "SweepStore": "inserr.sweep.store",
         "run_sweep": "inserr.sweep.runner",
+        "sweep": "inserr.sweep.api",
+        "SweepResult": "inserr.sweep.api",
     },
 )
+callable_package(__name__, "inserr.sweep.api", "sweep")
 
-__all__ = ["Grid", "build_grid", "SweepStore", "run_sweep"]
+__all__ = [
+    "Grid",
+    "build_grid",
+    "SweepStore",
+    "run_sweep",
+    "sweep",
+    "SweepResult",
+]

@@ -35,6 +35,7 @@ import time
 from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -223,11 +224,49 @@ class LocalEngine:
             kwargs["num_workers"] = self.workers
         if self.scheduler == "processes":
             kwargs["chunksize"] = 1
+            kwargs["initializer"] = partial(exit_with_parent, os.getpid())
         with sink, _one_blas_thread_per_process(self.scheduler == "processes"):
             dask.compute(*delayed, **kwargs)
 
     def close(self) -> None:
         """Release the engine (nothing to do: Dask's local pools end with each run)."""
+
+
+#: How often a worker process checks that the process that started it still runs, s.
+PARENT_POLL = 0.5
+
+
+def exit_with_parent(parent: int) -> None:
+    """Worker-process initializer: end this process as soon as its parent is gone.
+
+    A sweep's worker processes are children of the ``inserr sweep`` process. If that
+    process is killed outright (SIGKILL, the OOM killer), nothing tells the workers,
+    which would be re-parented and go on computing for nobody (and keep the
+    multiprocessing resource tracker alive). A daemon thread in each worker
+    watches its parent's pid every :data:`PARENT_POLL` seconds and ends the worker
+    when the parent changes; the resource tracker then ends too, as its last
+    client is gone. (A watchdog thread rather than Linux's ``PR_SET_PDEATHSIG``,
+    which fires when the *thread* that started the worker ends, not the process,
+    and exists on Linux only.)
+
+    Parameters
+    ----------
+    parent : int
+        The pid of the process that starts the workers, taken there: a worker may
+        start up only after its parent was killed, and would then see pid 1.
+    """
+    import threading
+
+    if os.getppid() != parent:
+        os._exit(1)
+
+    def watch() -> None:
+        while True:
+            time.sleep(PARENT_POLL)
+            if os.getppid() != parent:
+                os._exit(1)  # nobody is waiting for this worker's results any more
+
+    threading.Thread(target=watch, name="inserr-parent-watch", daemon=True).start()
 
 
 #: Environment variables that size the BLAS/OpenMP thread pools of a new process.

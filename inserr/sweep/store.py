@@ -6,14 +6,17 @@ Layout of ``OUT/``::
     points/<id>.json    one record per point: status, headline metrics, error message
     results.csv         one row per grid point, assembled from the records
     sweep*.png          summary plots of results.csv (:mod:`inserr.sweep.figures`)
+    .inserr-sweep       marker: the manifest of what a sweep writes here (:data:`MANIFEST`)
 
-Every file is written atomically (temporary file, then rename), so an interrupted
-sweep leaves complete records or none. A point is *finished* when its record has
-status ``ok``; a rerun with the same ``OUT`` skips finished points and retries
-the others (a worker lost last time may well succeed now). Records are keyed by
-the point's content hash, so growing the grid reuses every point already done.
-Run one sweep at a time in a directory: two runs sharing one would both compute
-the points neither had finished (harmlessly, but twice).
+A sweep writes into a directory only if it is new, empty or an earlier sweep's
+holding nothing else (:func:`check_sweep_dir`): a file of the user's is never
+overwritten or removed. Every file is written atomically (temporary file, then
+rename), so an interrupted sweep leaves complete records or none. A point is
+*finished* when its record has status ``ok``; a rerun with the same ``OUT`` skips
+finished points and retries the others (a worker lost last time may well succeed
+now). Records are keyed by the point's content hash, so growing the grid reuses
+every point already done. Run one sweep at a time in a directory: two runs sharing
+one would both compute the points neither had finished (harmlessly, but twice).
 
 The figures always describe the current ``results.csv``: each figure inserr
 writes carries a PNG text chunk :data:`FIGURE_MARK`, and a run removes the marked
@@ -27,11 +30,13 @@ from __future__ import annotations
 import csv
 import io
 import json
+import re
 import struct
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from inserr.output.outdir import Manifest, clean_leftovers, write_manifest
 from inserr.output.report import dumps, write_text_atomic
 from inserr.sweep.grid import Grid, Point, describe_grid
 
@@ -48,14 +53,69 @@ FIGURE_MARK = ("inserr", "sweep figure")
 
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
+#: Temporary record names of inserr versions before :mod:`inserr.output.outdir`
+#: (``tempfile.mkstemp(prefix=".<id>.json.")``), inside ``points/`` only.
+_TEMP_OF_OLD_VERSIONS = re.compile(r"^\.[0-9a-f]{16}\.json\.[A-Za-z0-9_]{8}$")
 
-def check_sweep_dir(out_dir: str | Path, field: str = "out") -> Path:
+
+#: Marker of a sweep directory; its manifest (:class:`inserr.output.outdir.Manifest`)
+#: names the files a sweep rewrites and the pattern of the records in ``points/``.
+MARKER = ".inserr-sweep"
+
+#: Name of a point's record: the point's id (16 hex digits) and ``.json``.
+RECORD_NAME = r"[0-9a-f]{16}\.json"
+
+#: What every sweep directory may hold, besides its figures (PNG files carrying
+#: :data:`FIGURE_MARK`).
+MANIFEST = Manifest("sweep", {"sweep.json": None, "results.csv": None}, {"points": RECORD_NAME})
+
+
+def _legacy_sweep_dir(path: Path) -> bool:
+    """A sweep directory written before markers existed, proven by its content.
+
+    It holds a ``sweep.json`` that describes a grid, and nothing but what a sweep
+    writes: ``results.csv``, figures carrying :data:`FIGURE_MARK`, and ``points/``
+    holding only records named by a point id whose ``"id"`` is that name.
+    """
+    try:
+        desc = json.loads((path / "sweep.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    if not isinstance(desc, dict) or not {"base_scenario", "params", "points"} <= set(desc):
+        return False
+    pattern = re.compile(RECORD_NAME)
+    for e in path.iterdir():
+        if e.name in ("sweep.json", "results.csv") and e.is_file() and not e.is_symlink():
+            continue
+        if e.suffix == ".png" and is_sweep_figure(e):
+            continue
+        if e.name == "points" and e.is_dir() and not e.is_symlink():
+            for rec in e.iterdir():
+                if _TEMP_OF_OLD_VERSIONS.match(rec.name):
+                    continue  # half-written by a killed run: prepare() removes it
+                if not (rec.is_file() and pattern.fullmatch(rec.name)):
+                    return False
+                try:
+                    if json.loads(rec.read_text(encoding="utf-8")).get("id") != rec.stem:
+                        return False
+                except (OSError, ValueError, AttributeError):
+                    return False
+            continue
+        return False
+    return True
+
+
+def check_sweep_dir(
+    out_dir: str | Path, field: str = "out", inputs: Iterable[str | Path] = ()
+) -> Path:
     """Check, before any work, that ``out_dir`` can hold this sweep.
 
     A sweep writes ``sweep.json``, ``results.csv``, ``points/`` and its figures into
     the directory and resumes from what is there, so the directory must be new,
-    empty, or an earlier sweep's (it holds ``sweep.json`` or ``points/``); see
-    :func:`inserr.output.report.check_output_dir` for the rest.
+    empty, or an earlier sweep's holding nothing else: its :data:`MARKER` manifest
+    (or, for a sweep written before markers, :func:`_legacy_sweep_dir`) must cover
+    every entry. It must be writable and hold none of the run's ``inputs``; see
+    :func:`inserr.output.outdir.check_output_dir` for the rest.
 
     Parameters
     ----------
@@ -63,20 +123,26 @@ def check_sweep_dir(out_dir: str | Path, field: str = "out") -> Path:
         The sweep directory asked for.
     field : str
         Name of the argument in the error message.
+    inputs : iterable of path
+        Files the sweep reads (its scenario file).
 
     Returns
     -------
     Path
         The resolved directory.
     """
-    from inserr.output.report import check_output_dir
+    from inserr.output.outdir import check_output_dir
 
     return check_output_dir(
         out_dir,
         field,
-        lambda p: (p / "sweep.json").is_file() or (p / "points").is_dir(),
+        _legacy_sweep_dir,
         "an inserr sweep",
-        "name a new directory, or the directory of an earlier sweep to resume it",
+        "name a new directory, or move that file out "
+        "(a sweep's directory holds only what the sweep writes)",
+        marker=MARKER,
+        also_ours=lambda p: p.suffix == ".png" and is_sweep_figure(p),
+        inputs=inputs,
     )
 
 
@@ -94,16 +160,26 @@ class SweepStore:
         self.points_dir = self.root / "points"
 
     def prepare(self, grid: Grid) -> None:
-        """Create the directory, drop temporary files a killed run left, record the grid.
+        """Create the directory and its marker, drop what a killed run left, record the grid.
+
+        The marker (:data:`MARKER`, with :data:`MANIFEST`) is written before anything
+        else, so the directory is provably the sweep's from its first file on.
 
         Parameters
         ----------
         grid : Grid
             The grid of this run, written to ``sweep.json``.
         """
-        self.points_dir.mkdir(parents=True, exist_ok=True)
+        self.root.mkdir(parents=True, exist_ok=True)
+        write_manifest(self.root, MARKER, MANIFEST)
+        self.points_dir.mkdir(exist_ok=True)
+        # Half-written files of a run that was killed mid-write (their writer is gone).
+        clean_leftovers(self.root)
+        clean_leftovers(self.points_dir)
         for stale in self.points_dir.glob(".*.json.*"):
-            stale.unlink(missing_ok=True)  # half-written by a run that was killed mid-write
+            if not _TEMP_OF_OLD_VERSIONS.match(stale.name):
+                continue
+            stale.unlink(missing_ok=True)
         write_text_atomic(self.root / "sweep.json", dumps(describe_grid(grid)) + "\n")
 
     def path(self, pid: str) -> Path:
