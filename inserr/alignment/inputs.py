@@ -26,6 +26,8 @@ Keys read
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,6 +38,7 @@ from inserr.alignment.study import Base, alignment_timeline
 from inserr.core.errors import InputError
 from inserr.core.imu import ImuErrors
 from inserr.scenario.schema import Scenario
+from inserr.schemes.vehicle_motion import heading_sign
 
 #: Fields of :class:`~inserr.alignment.filter.Prior` -> the scenario key they come from.
 _PRIOR_KEYS = {
@@ -189,9 +192,10 @@ def observability_system(scen: Scenario) -> tuple[Any, dict[str, Any]]:
         raise InputError(
             "observability.headings", "give either headings or a scheme (scheme.name), not both"
         )
-    h = np.asarray(headings, dtype=float)
+    # IMU headings in the declared sense (motion.heading_convention), turned into inserr's.
+    h = np.asarray(headings, dtype=float) * heading_sign(scen.heading_convention)
     dwell = scen.scheme_stop
-    extra = {"headings_deg": [float(v) for v in np.degrees(h)], "dwell_s": dwell}
+    extra = {"headings_deg": [float(v) for v in np.degrees(headings)], "dwell_s": dwell}
     if model in ("auto", "alignment10"):
         if position:
             raise InputError(
@@ -199,6 +203,20 @@ def observability_system(scen: Scenario) -> tuple[Any, dict[str, Any]]:
                 "the 10-state model has no position states",
                 "use the full model",
             )
-        return ob.alignment10(scen.site, h, dwell), extra
+        return _as_declared(ob.alignment10(scen.site, h, dwell), h, headings), extra
     system = ob.full_headings(scen.site, h, dwell, position=position, vertical=scen.vertical)
-    return system, extra
+    return _as_declared(system, h, headings), extra
+
+
+def _as_declared(system: Any, h: np.ndarray, declared) -> Any:
+    """``system`` whose description lists the headings as the scenario declared them."""
+    if np.array_equal(h, np.asarray(declared, dtype=float)):
+        return system
+
+    def deg(values) -> str:
+        return ", ".join(f"{math.degrees(v):g}" for v in values)
+
+    text = system.description.replace(
+        f"headings {deg(h)} deg", f"headings {deg(declared)} deg counter-clockwise", 1
+    )
+    return dataclasses.replace(system, description=text)

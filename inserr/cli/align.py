@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     common = {
         "minutes": duration / 60.0,
         "lat_deg": math.degrees(base.site.lat),
-        "base": base.motion.describe(),
+        "base": base.motion.describe(scen.heading_convention),
         "static_floor": floor,
         "static_floor_diffuse_prior": floor_diffuse,
         "settings": r.meta,
@@ -127,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
         rows.append(row)
     human = (
         f"alignment {duration / 60:g} min at lat {math.degrees(base.site.lat):g} deg, "
-        f"{base.motion.describe()}\n"
+        f"{base.motion.describe(scen.heading_convention)}\n"
         f"static floors with this prior: phi_e {floor['phi_e_arcsec']:.4g} arcsec, "
         f"phi_n {floor['phi_n_arcsec']:.4g} arcsec, "
         f"heading {floor['phi_u_arcmin']:.4g} arcmin "

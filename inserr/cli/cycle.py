@@ -18,7 +18,17 @@ from inserr.cli.common import add_json_flag, emit, format_table
 from inserr.scenario.flags import add_flags, scenario_from_args
 
 #: The flags of ``inserr cycle``: the scheme and the (static) vehicle attitude.
-FLAG_NAMES = ("scheme", "rate", "stop", "reversal", "heading", "pitch", "roll")
+FLAG_NAMES = (
+    "scheme",
+    "rate",
+    "stop",
+    "start",
+    "reversal",
+    "heading-convention",
+    "heading",
+    "pitch",
+    "roll",
+)
 
 
 #: Relative size below which a cycle-integral entry is round-off of exactly cancelling

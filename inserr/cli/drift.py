@@ -27,7 +27,7 @@ def run(args: argparse.Namespace) -> int:
     warn_empty_budget(args, [r])
     budget = [(source_label(k), v) for k, v in list(m["error_budget"].items())[:8]]
     human = (
-        f"scheme {m['scheme']}, {m['hours']:g} h, {scen.motion.describe()}\n"
+        f"scheme {m['scheme']}, {m['hours']:g} h, {scen.motion.describe(scen.heading_convention)}\n"
         + format_table(
             ["metric", "value"],
             [[label, value] for label, value in zip(METRIC_COLUMNS, metric_values(r), strict=True)],

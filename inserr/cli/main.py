@@ -75,6 +75,61 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def _options(parser: argparse.ArgumentParser) -> tuple[set[str], set[str]]:
+    """Option strings of ``parser`` and its sub-commands: those taking a value, and all."""
+    takes: set[str] = set()
+    every: set[str] = set()
+    for action in parser._actions:  # argparse keeps no public list of its actions
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                t, e = _options(sub)
+                takes |= t
+                every |= e
+        every.update(action.option_strings)
+        if action.nargs != 0:
+            takes.update(action.option_strings)
+    return takes, every
+
+
+def join_negative_values(argv: list[str], parser: argparse.ArgumentParser) -> list[str]:
+    """``--flag -value`` as ``--flag=-value`` for every flag that takes a value.
+
+    argparse takes a word that starts with ``-`` for an option unless it looks like a
+    plain negative number, so ``--yaw-swing -6,60`` or ``--duration -3min`` would be
+    an argparse error instead of the value's own message. A word after a value-taking
+    flag is its value unless it is one of the parser's options (or starts with
+    ``--``); a unique abbreviation of a flag counts as the flag, as argparse allows.
+    Everything after ``--`` is left alone.
+    """
+    takes, every = _options(parser)
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        word = argv[i]
+        if word == "--":
+            out.extend(argv[i:])
+            break
+        flag = word
+        if word.startswith("--") and word not in every and "=" not in word:
+            matches = [o for o in every if o.startswith(word)]
+            flag = matches[0] if len(matches) == 1 else word
+        nxt = argv[i + 1] if i + 1 < len(argv) else None
+        if (
+            flag in takes
+            and nxt is not None
+            and nxt.startswith("-")
+            and not nxt.startswith("--")
+            and len(nxt) > 1
+            and nxt not in every
+        ):
+            out.append(f"{word}={nxt}")
+            i += 2
+            continue
+        out.append(word)
+        i += 1
+    return out
+
+
 def input_files(args: argparse.Namespace) -> list[str]:
     """The files a command reads that are named on its command line (the scenario file)."""
     path = getattr(args, "scenario", None)
@@ -125,7 +180,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     command = next((a for a in argv if not a.startswith("-")), None)
     parser = build_parser(command)
-    args = parser.parse_args(argv)
+    args = parser.parse_args(join_negative_values(argv, parser))
     if args.command is None:
         parser.print_help()
         return 2

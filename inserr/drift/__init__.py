@@ -7,6 +7,8 @@ The package is callable: ``inserr.drift(scenario, "two-position")`` runs
   (:func:`~inserr.drift.analysis.analyze_drift`).
 * ``unknown_signs`` — RMS and exact worst case over the signs of the constant errors.
 * ``study`` — a scenario run under a scheme (:func:`~inserr.drift.study.run_scheme`), tables.
+* ``comparison`` — schemes compared on one scenario: figures per error set, motion grids.
+* ``paper`` — a paper's published figures beside the model's: readings, sign ranges, claims.
 * ``validity`` — where a result can be trusted: finiteness, the free vertical channel,
   the linear model's range, Schuler resonance of the indexing cycle.
 * ``figures`` — horizontal error, attitude, error budget and table-angle figures.

@@ -15,6 +15,9 @@ magnitudes ``sigma_i``:
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
 
@@ -90,3 +93,227 @@ def _walk(vv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     np.put_along_axis(rank, order, np.arange(n)[None, :].repeat(t_n, 0), axis=-1)
     signs = np.where(rank < best[:, None], -s0, s0)
     return norm, signs
+
+
+# --- every sign pattern at once: the range of a figure over the patterns ----------------
+# A published figure is usually one sign pattern's maximum over the run,
+# ``M(s) = max_t |sum_i s_i v_i(t)|``. Its largest value over the 2^N patterns is the
+# worst case above (maximum over time of the per-time maximum). Its smallest value is a
+# min-max problem with no such structure; it is bracketed here: a pattern found by
+# descent gives an attained value, and an exhaustive search over the largest sources,
+# the others bounded by their norms, gives a value no pattern goes below.
+
+
+def pattern_maximum(vectors: np.ndarray, signs: np.ndarray) -> float:
+    """``M(s) = max_t |sum_i s_i v_i(t)|`` for (T, N, 2) vectors and one pattern (N,) of +-1."""
+    total = np.einsum("tnd,n->td", np.asarray(vectors, dtype=float), np.asarray(signs, float))
+    return float(np.max(np.hypot(total[:, 0], total[:, 1])))
+
+
+@dataclass(frozen=True)
+class SignRange:
+    """The range of ``M(s) = max_t |sum_i s_i v_i(t)|`` over the sign patterns ``s``.
+
+    Attributes
+    ----------
+    highest : float
+        The largest ``M(s)`` (exact), with ``highest_signs`` reaching it.
+    lowest : float
+        The smallest ``M(s)`` found, with ``lowest_signs`` reaching it.
+    lowest_bound : float
+        No pattern has ``M(s)`` below it (``lowest_bound <= min M <= lowest``).
+    """
+
+    highest: float
+    highest_signs: np.ndarray
+    lowest: float
+    lowest_signs: np.ndarray
+    lowest_bound: float
+
+
+def _descend(v: np.ndarray, signs: np.ndarray, cost) -> tuple[np.ndarray, float]:
+    """Single sign flips while one lowers ``cost(M(s))`` (the best flip each pass)."""
+    s = signs.astype(float).copy()
+    total = np.einsum("tnd,n->td", v, s)
+    best = cost(float(np.max(np.hypot(total[:, 0], total[:, 1]))))
+    while True:
+        # M after flipping each sign i: max_t |total - 2 s_i v_i|, all i at once.
+        trial = total[:, None, :] - 2.0 * s[None, :, None] * v  # (T, N, 2)
+        m = np.max(np.hypot(trial[..., 0], trial[..., 1]), axis=0)
+        c = np.array([cost(float(x)) for x in m])
+        i = int(np.argmin(c))
+        if not c[i] < best - 1e-15 * max(1.0, abs(best)):
+            return s, float(pattern_maximum(v, s))
+        s[i] = -s[i]
+        total = trial[:, i, :]
+        best = c[i]
+
+
+def sign_pattern_range(
+    vectors: np.ndarray, exhaustive: int = 16, times: int = 96, starts: int = 16
+) -> SignRange:
+    """Smallest and largest ``M(s) = max_t |sum_i s_i v_i(t)|`` over the patterns ``s_i = +-1``.
+
+    Parameters
+    ----------
+    vectors : (T, N, 2) array
+        Per-source horizontal error vectors (scaled by the source magnitudes) at the
+        T output times.
+    exhaustive : int
+        Number of largest sources (by ``max_t |v_i|``) whose patterns are all tried for
+        the lower bound (2^(exhaustive - 1) patterns: ``M(s) = M(-s)``).
+    times : int
+        Times (evenly spaced, the last included) at which the exhaustive search is
+        evaluated; fewer times keep the bound valid, only looser.
+    starts : int
+        Best patterns of the exhaustive search from which the descent starts.
+
+    Returns
+    -------
+    SignRange
+        ``highest`` is exact (:func:`worst_case_norm` at its worst time). The bound:
+        ``|sum_i s_i v_i| >= |sum_big s_i v_i| - sum_small |v_i|`` at every time, so
+        ``min_s M(s) >= min_big max_t' (|sum_big| - sum_small |v_i|)`` over any
+        subset of times t'; ``lowest`` is the best descent (single sign flips, all
+        times) from the best patterns of that search.
+    """
+    v = np.asarray(vectors, dtype=float)
+    n_t, n = v.shape[:2]
+    norm, signs = worst_case_norm(v)
+    t_hi = int(np.argmax(norm))
+    if n == 0:
+        zero = np.zeros(0)
+        return SignRange(0.0, zero, 0.0, zero, 0.0)
+    size = np.max(np.hypot(v[..., 0], v[..., 1]), axis=0)
+    order = np.argsort(-size)
+    big, small = order[: min(n, exhaustive)], order[min(n, exhaustive) :]
+    k = len(big)
+    sel = np.unique(np.linspace(0, n_t - 1, min(n_t, times)).round().astype(int))
+    slack = np.sum(np.hypot(v[sel][:, small, 0], v[sel][:, small, 1]), axis=1)  # (T',)
+    vb = v[sel][:, big, :].reshape(len(sel), k, 2)
+    flat = np.moveaxis(vb, 1, 0).reshape(k, -1)  # (k, 2T')
+    codes = np.arange(2 ** (k - 1))
+    bound, top = np.inf, []
+    for lo in range(0, len(codes), 1 << 14):
+        c = codes[lo : lo + (1 << 14)]
+        pat = np.ones((len(c), k))
+        pat[:, 1:] = 1.0 - 2.0 * ((c[:, None] >> np.arange(k - 1)) & 1)
+        sums = (pat @ flat).reshape(len(c), len(sel), 2)
+        m = np.max(np.hypot(sums[..., 0], sums[..., 1]) - slack, axis=1)
+        bound = min(bound, float(np.max([m.min(), 0.0])))
+        best = np.argsort(m)[:starts]
+        top += [(float(m[j]), pat[j]) for j in best]
+    top = sorted(top, key=lambda x: x[0])[:starts]
+    lowest, lowest_signs = math.inf, None
+    for _, pat in top:
+        s0 = np.ones(n)
+        s0[big] = pat
+        s, value = _descend(v, s0, lambda x: x)
+        if value < lowest:
+            lowest, lowest_signs = value, s
+    return SignRange(float(norm[t_hi]), signs[t_hi], lowest, lowest_signs, min(bound, lowest))
+
+
+def _closest_exhaustive(v: np.ndarray, target: float) -> tuple[np.ndarray, float]:
+    """The pattern whose ``M(s)`` is closest to ``target``, over all of them (``M(s) = M(-s)``)."""
+    n = v.shape[1]
+    flat = np.moveaxis(v, 1, 0).reshape(n, -1)
+    best, best_gap = np.ones(n), math.inf
+    codes = np.arange(2 ** (n - 1))
+    for lo in range(0, len(codes), 1 << 12):
+        c = codes[lo : lo + (1 << 12)]
+        pat = np.ones((len(c), n))
+        pat[:, 1:] = 1.0 - 2.0 * ((c[:, None] >> np.arange(n - 1)) & 1)
+        sums = (pat @ flat).reshape(len(c), v.shape[0], 2)
+        m = np.max(np.hypot(sums[..., 0], sums[..., 1]), axis=1)
+        j = int(np.argmin(np.abs(m - target)))
+        if abs(m[j] - target) < best_gap:
+            best, best_gap = pat[j].copy(), abs(m[j] - target)
+    return best, pattern_maximum(v, best)
+
+
+def closest_pattern(
+    vectors: np.ndarray,
+    target: float,
+    rng: SignRange | None = None,
+    walks: int = 64,
+    exhaustive: int = 14,
+) -> tuple[np.ndarray, float]:
+    """A sign pattern whose ``M(s)`` is as close to ``target`` as a search finds.
+
+    With at most ``exhaustive`` sources every pattern is tried (the answer is exact).
+    Otherwise the search walks from the lowest to the highest pattern of :func:`sign_pattern_range`
+    one flip at a time, in ``walks`` orders (smallest sources first, largest first, and
+    seeded random orders: the result is reproducible), keeps the pattern closest to
+    ``target``, and improves it by single flips. Each flip changes ``M`` by at most
+    ``2 max_t |v_i|``, so a target inside ``[lowest, highest]`` is always reached to
+    within ``max_i max_t |v_i|`` (the largest source), usually far closer.
+
+    Returns
+    -------
+    signs : (N,) ndarray of +-1
+    value : float
+        ``M(signs)``.
+    """
+    v = np.asarray(vectors, dtype=float)
+    if 0 < v.shape[1] <= exhaustive:
+        return _closest_exhaustive(v, target)
+    rng = rng or sign_pattern_range(v)
+    size = np.max(np.hypot(v[..., 0], v[..., 1]), axis=0)
+    differ = np.flatnonzero(rng.lowest_signs != rng.highest_signs)
+    orders = [differ[np.argsort(size[differ])], differ[np.argsort(-size[differ])]]
+    gen = np.random.default_rng(0)
+    orders += [gen.permutation(differ) for _ in range(max(0, walks - 2))]
+    best, best_gap = rng.lowest_signs.copy(), abs(rng.lowest - target)
+    for order in orders:
+        s = rng.lowest_signs.astype(float).copy()
+        total = np.einsum("tnd,n->td", v, s)
+        for i in order:
+            total = total - 2.0 * s[i] * v[:, i, :]
+            s[i] = -s[i]
+            gap = abs(float(np.max(np.hypot(total[:, 0], total[:, 1]))) - target)
+            if gap < best_gap:
+                best, best_gap = s.copy(), gap
+    return _descend(v, best, lambda x: abs(x - target))
+
+
+def figure_reach(vectors: np.ndarray, target: float, tol: float = 0.01) -> dict:
+    """Can some sign pattern of these errors give the figure ``target`` (``M(s)``, m)?
+
+    Parameters
+    ----------
+    vectors : (T, N, 2) array
+        Per-source horizontal error vectors, m (scaled by the magnitudes).
+    target : float
+        A published maximum horizontal error, m.
+    tol : float
+        Relative distance at which a pattern found counts as reaching it.
+
+    Returns
+    -------
+    dict
+        ``lowest_bound``, ``lowest``, ``highest`` (:func:`sign_pattern_range`, m);
+        ``closest`` (``M`` of the closest pattern found, m) and ``closest_signs``;
+        ``verdict``: ``"reached"`` (within ``tol``), ``"below every pattern"``
+        (``target < lowest_bound``: proved), ``"above every pattern"``
+        (``target > highest``: proved) or ``"not found"`` (inside the range, missed
+        by the search).
+    """
+    rng = sign_pattern_range(vectors)
+    signs, value = closest_pattern(vectors, target, rng)
+    if abs(value - target) <= tol * abs(target):
+        verdict = "reached"
+    elif target < rng.lowest_bound:
+        verdict = "below every pattern"
+    elif target > rng.highest:
+        verdict = "above every pattern"
+    else:
+        verdict = "not found"
+    return {
+        "lowest_bound": rng.lowest_bound,
+        "lowest": rng.lowest,
+        "highest": rng.highest,
+        "closest": value,
+        "closest_signs": signs,
+        "verdict": verdict,
+    }

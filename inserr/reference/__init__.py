@@ -4,6 +4,7 @@
 * ``injection`` — IMU errors injected on the ideal increments, initial errors.
 * ``validation`` — linear against nonlinear, Monte Carlo against covariance
   (:func:`~inserr.reference.validation.validate`).
+* ``linearity`` — long runs through both, and where the linearisation stops holding.
 * ``figures`` — the overlay and Monte Carlo figures.
 * ``report`` — the validation report, for the one writer.
 """

@@ -124,7 +124,12 @@ FLAGS: dict[str, Flag] = {
     "initial-velocity": _F("initial.velocity", "m/s", "initial velocity error: one value or E,N,U"),
     "initial-position": _F("initial.position", "m", "initial position error: one value or E,N,U"),
     # [motion]
-    "heading": _F("motion.heading", "deg", "vehicle heading, clockwise from north"),
+    "heading-convention": _F(
+        "motion.heading_convention",
+        None,
+        "sense of --heading, --turn-rate, --yaw-swing, heading histories and the mounting heading",
+    ),
+    "heading": _F("motion.heading", "deg", "vehicle heading from north (see --heading-convention)"),
     "pitch": _F("motion.pitch", "deg", "vehicle pitch"),
     "roll": _F("motion.roll", "deg", "vehicle roll"),
     "turn-rate": _F("motion.rate", "deg/s", "turn on the spot at this constant heading rate"),
@@ -139,6 +144,7 @@ FLAGS: dict[str, Flag] = {
     "schemes": _F("compare.schemes", None, "schemes to run side by side, comma-separated", "A,B"),
     "rate": _F("scheme.rate", "deg/s", "table rate"),
     "stop": _F("scheme.stop", "s", "stop (dwell) time at each position"),
+    "start": _F("scheme.start", None, "opening phase: a stop at the first position, or a turn"),
     "reversal": _F("scheme.reversal", "s", "reversal period of the continuous scheme (0 = never)"),
     "delta": _F("scheme.delta", None, "stop threshold of the flexible scheme"),
     "variant": _F("scheme.variant", None, "variant of the flexible scheme"),
@@ -291,8 +297,8 @@ IMU_FLAGS = (
     "accel-correlation-time",
 )
 INITIAL = ("initial-attitude", "initial-velocity", "initial-position")
-MOTION = ("heading", "pitch", "roll", "turn-rate", "yaw-swing")
-SCHEME = ("scheme", "rate", "stop", "reversal", "delta", "variant")
+MOTION = ("heading-convention", "heading", "pitch", "roll", "turn-rate", "yaw-swing")
+SCHEME = ("scheme", "rate", "stop", "start", "reversal", "delta", "variant")
 OUTPUT = ("step", "covariance-step", "export-step", "substep", "vertical", "engine")
 #: The scenario flags of ``drift`` (and ``compare``, ``validate``, ``sweep``).
 DRIFT = ("duration", *SITE, *IMU_FLAGS, *INITIAL, *MOTION, *SCHEME, *OUTPUT)

@@ -35,7 +35,15 @@ from inserr.core.earth import Site
 from inserr.core.errors import InputError
 from inserr.core.imu import ImuErrors, InitialErrors
 from inserr.core.units import DAY, DEG, DEG_PER_HOUR, DEG_PER_SQRT_HOUR, MICRO_G, parse_quantity
-from inserr.schemes.vehicle_motion import HeadingHistory, Motion, Turn, YawSwing
+from inserr.schemes.open_loop import SCHEME_STARTS
+from inserr.schemes.vehicle_motion import (
+    HEADING_CONVENTIONS,
+    HeadingHistory,
+    Motion,
+    Turn,
+    YawSwing,
+    heading_sign,
+)
 
 #: Largest number of samples (or sub-step segments) one run keeps in memory.
 MAX_SAMPLES = 3_000_000
@@ -108,7 +116,13 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
     "motion": {
         "type": _K("str", None, "static", "static | yaw-swing | turn | heading-history"),
-        "heading": _K("angle", None, "0 deg", "vehicle heading, clockwise from north"),
+        "heading_convention": _K(
+            "str",
+            None,
+            "clockwise-from-north",
+            "sense of heading, heading rates, heading history and mounting heading",
+        ),
+        "heading": _K("angle", None, "0 deg", "vehicle heading from north (heading_convention)"),
         "pitch": _K("angle", None, "0 deg", "vehicle pitch"),
         "roll": _K("angle", None, "0 deg", "vehicle roll"),
         "amplitude": _K("angular_rate", None, "0 deg/s", "yaw-swing: peak heading rate"),
@@ -120,6 +134,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "name": _K("str", None, "none", "indexing scheme"),
         "rate": _K("angular_rate", None, "6 deg/s", "table rate"),
         "stop": _K("time", None, "300 s", "stop (dwell) time at each position"),
+        "start": _K("str", None, "stop", "opening phase: stop (at the first position) | turn"),
         "reversal": _K("time", None, "0 s", "continuous: reversal period (0 = never)"),
         "delta": _K("float", None, 0.01, "flexible-two-position: stop threshold"),
         "variant": _K("str", None, "threshold", "flexible-two-position: threshold | crossing"),
@@ -335,6 +350,8 @@ CHOICES: dict[str, tuple[str, ...]] = {
     "scheme.variant": ("threshold", "crossing"),
     "design.family": ("single-axis", "nulling", "flexible", "dual-axis"),
     "design.motions": ("grid", "random", "scenario", "files"),
+    "scheme.start": SCHEME_STARTS,
+    "motion.heading_convention": HEADING_CONVENTIONS,
     "observability.model": ("auto", "alignment10", "full"),
     "calibration.positioning_model": ("three-axis", "gimbal"),
     "calibration.design_sensors": ("gyro", "gyro+accel"),
@@ -481,6 +498,16 @@ class Scenario:
             return _value(SCHEMA[section][name], key, study_default(key, self.study))
         raise KeyError(key)
 
+    @property
+    def heading_convention(self) -> str:
+        """The declared sense of headings and heading rates (``motion.heading_convention``).
+
+        The motion, the mounting and the observability headings are already turned
+        into inserr's clockwise sense; this is for writing them back as declared
+        (:meth:`~inserr.schemes.vehicle_motion.Motion.describe`) and for reports.
+        """
+        return self.value("motion.heading_convention")
+
     def given(self, key: str) -> bool:
         """Whether the dotted key was written (in the file or by a flag), not defaulted."""
         section, _, name = key.partition(".")
@@ -493,7 +520,8 @@ class Scenario:
         name = name or self.scheme_name
         opts = dict(self.scheme_options)
         if name != self.scheme_name:
-            opts = {k: v for k, v in opts.items() if k == "mounting"}
+            # Compared schemes share the table's mounting and opening phase only.
+            opts = {k: v for k, v in opts.items() if k in ("mounting", "start")}
         return build_scheme(name, self.scheme_rate, self.scheme_stop, **_options_for(name, opts))
 
     def timeline(self, name: str | None = None):
@@ -534,7 +562,7 @@ def all_keys() -> list[str]:
 
 
 def _options_for(name: str, opts: dict) -> dict:
-    keep = {"mounting"}
+    keep = {"mounting", "start"}
     if name == "continuous":
         keep |= {"reversal"}
     if name in ("flexible-two-position", "nulling-two-position"):
@@ -860,12 +888,14 @@ def scenario_from_dict(
         "delta": sh["delta"],
         "variant": sh["variant"],
         "f": sh["decision_rate"],
+        "start": sh["start"],
     }
     if np.any(sh["mounting"]):
         from inserr.core.rotations import body_to_nav
 
         m = sh["mounting"]
-        opts["mounting"] = body_to_nav(m[0], m[1], m[2])
+        # The mounting heading is a heading: it follows motion.heading_convention.
+        opts["mounting"] = body_to_nav(heading_sign(mo["heading_convention"]) * m[0], m[1], m[2])
     if sh["steps"]:
         opts["steps"] = _steps(sh["steps"])
     if sh["extension"] is not None:
@@ -992,16 +1022,24 @@ def _refuse_ignored_motion_keys(given: set[str], mo: Mapping[str, Any]) -> None:
 
 
 def _motion(mo: dict, base_dir: Path | None) -> Motion:
+    """The vehicle motion of ``[motion]``, headings and rates turned into inserr's sense.
+
+    Under ``heading_convention = "counter-clockwise-from-north"`` the heading, the
+    yaw-swing amplitude, the turn rate and the heading history are negated: the
+    motion objects always hold headings clockwise from north (the same physical
+    motion, written the other way round). Pitch and roll do not depend on it.
+    """
     kind = mo["type"]
-    common = {"heading": mo["heading"], "pitch": mo["pitch"], "roll": mo["roll"]}
+    k = heading_sign(mo["heading_convention"])
+    common = {"heading": k * mo["heading"], "pitch": mo["pitch"], "roll": mo["roll"]}
     if kind == "static":
         return Motion(**common)
     if kind == "yaw-swing":
         if mo["period"] <= 0:
             raise InputError("motion.period", "must be > 0 s")
-        return YawSwing(**common, amplitude=mo["amplitude"], period=mo["period"])
+        return YawSwing(**common, amplitude=k * mo["amplitude"], period=mo["period"])
     if kind == "turn":
-        return Turn(**common, rate=mo["rate"])
+        return Turn(**common, rate=k * mo["rate"])
     if kind == "heading-history":
         path = Path(mo["file"])
         if base_dir is not None and not path.is_absolute():
@@ -1017,7 +1055,10 @@ def _motion(mo: dict, base_dir: Path | None) -> Motion:
         if arr.shape[1] != 2:
             raise InputError("motion.file", "needs two columns: time_s, heading_deg")
         return HeadingHistory(
-            pitch=mo["pitch"], roll=mo["roll"], times=arr[:, 0], headings=np.unwrap(arr[:, 1] * DEG)
+            pitch=mo["pitch"],
+            roll=mo["roll"],
+            times=arr[:, 0],
+            headings=np.unwrap(k * arr[:, 1] * DEG),
         )
     raise InputError(
         "motion.type", f"unknown motion {kind!r}", f"use one of: {', '.join(MOTION_TYPES)}"

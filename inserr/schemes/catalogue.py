@@ -14,6 +14,7 @@ import math
 from inserr.core.errors import InputError
 from inserr.schemes.closed_loop import FlexibleTwoPosition, HeadingIsolation
 from inserr.schemes.open_loop import (
+    SCHEME_STARTS,
     TableScheme,
     continuous,
     eight_position,
@@ -22,6 +23,7 @@ from inserr.schemes.open_loop import (
     sixteen_position,
     sixteen_position_inserr,
     two_position,
+    with_start,
 )
 
 SCHEMES = (
@@ -53,7 +55,8 @@ def build_scheme(name: str, rate: float, stop: float, **options):
         Stop (dwell) time (> 0; 0 allowed for ``continuous``).
     **options
         ``reversal`` (continuous, s), ``delta``/``variant``/``f`` (flexible),
-        ``steps`` (custom: list of Step), ``mounting`` (3x3).
+        ``steps`` (custom: list of Step), ``mounting`` (3x3), ``start`` (every
+        scheme: ``"stop"``, the default, or ``"turn"``: open with the first turn).
 
     Raises
     ------
@@ -68,11 +71,20 @@ def build_scheme(name: str, rate: float, stop: float, **options):
         )
     if not (math.isfinite(rate) and rate > 0):
         raise InputError("scheme.rate", f"table rate must be > 0, got {rate!r}")
+    # A custom table's stop is only its opening stop (each step has its own dwell), so
+    # zero is allowed there: the run then opens with the table's first turn.
     if not (math.isfinite(stop) and stop >= 0) or (
-        stop == 0 and name not in ("continuous", "none")
+        stop == 0 and name not in ("continuous", "none", "custom")
     ):
         raise InputError("scheme.stop", f"stop time must be > 0 s, got {stop!r}")
     mounting = options.pop("mounting", None)
+    start = options.pop("start", "stop")
+    if start not in SCHEME_STARTS:
+        raise InputError(
+            "scheme.start",
+            f"unknown opening phase {start!r}",
+            f"use one of: {', '.join(SCHEME_STARTS)}",
+        )
     if name == "none":
         s = none_scheme(rate, stop)
     elif name == "continuous":
@@ -88,13 +100,13 @@ def build_scheme(name: str, rate: float, stop: float, **options):
     elif name == "sixteen-position-inserr":
         s = sixteen_position_inserr(rate, stop)
     elif name == "flexible-two-position":
-        return FlexibleTwoPosition(rate, stop, mounting=mounting, **options)
+        return FlexibleTwoPosition(rate, stop, mounting=mounting, start=start, **options)
     elif name == "heading-isolation":
-        return HeadingIsolation(rate, stop, mounting=mounting)
+        return HeadingIsolation(rate, stop, mounting=mounting, start=start)
     elif name == "nulling-two-position":
         from inserr.schemes.nulling import NullingTwoPosition
 
-        return NullingTwoPosition(rate, stop, mounting=mounting, **options)
+        return NullingTwoPosition(rate, stop, mounting=mounting, start=start, **options)
     else:  # custom
         steps = options.pop("steps", None)
         if not steps:
@@ -108,4 +120,4 @@ def build_scheme(name: str, rate: float, stop: float, **options):
         raise InputError("scheme", f"option(s) {sorted(options)} do not apply to {name}")
     if mounting is not None:
         s = TableScheme(s.name, s.steps, s.rate, s.first_dwell, s.start, s.start_label, mounting)
-    return s
+    return with_start(s, start)

@@ -43,6 +43,14 @@ from inserr.schemes.vehicle_motion import (
 )
 
 
+def _check_start(start: str) -> None:
+    """Refuse an opening phase other than ``"stop"`` or ``"turn"`` (``scheme.start``)."""
+    if start not in ("stop", "turn"):
+        raise InputError(
+            "scheme.start", f"unknown opening phase {start!r}", "use one of: stop, turn"
+        )
+
+
 def _imu_heading(motion: Motion, t: np.ndarray, a: np.ndarray, mounting) -> np.ndarray:
     """IMU heading (rad) of a single-axis table at outer angle ``a`` on ``motion``, times ``t``."""
     return motion.heading_at(t) + imu_heading_offset(motion.tilt, a, 0.0, mounting)
@@ -509,6 +517,9 @@ class FlexibleTwoPosition:
 
     Psi_imu is the true IMU heading (the INS's own heading differs by its heading
     error, arc-minutes, which does not move a 0.01 threshold).
+
+    ``start="turn"`` leaves out the opening stop: the run begins with step 1's
+    variable turn, its stop test on empty sums (``Sc = Ss = 0``, so no sign condition).
     """
 
     rate: float
@@ -518,12 +529,14 @@ class FlexibleTwoPosition:
     variant: str = "threshold"
     mounting: np.ndarray | None = field(default=None, compare=False)
     name: str = "flexible-two-position"
+    start: str = "stop"
 
     def __post_init__(self) -> None:
         if self.variant not in ("threshold", "crossing"):
             raise InputError(
                 "scheme.variant", f"unknown variant {self.variant!r}", "use threshold or crossing"
             )
+        _check_start(self.start)
 
     def _variable_turn(
         self, b: ScheduleBuilder, sums: list, which: int, direction: float, search
@@ -555,15 +568,17 @@ class FlexibleTwoPosition:
         sums = [0.0, 0.0]  # Sc, Ss
         fallbacks = 0
         phase = 0
+        opening_stop = self.start == "stop"
         while b.t < duration:
-            # The stop's samples: those at or after its start and before its end.
-            k0 = math.ceil(b.t * self.f - 1e-9)
-            k1 = math.ceil((b.t + self.stop) * self.f - 1e-9)
-            sc, ss = stop_sums(k0, k1, b.a)
-            sums = [sums[0] + sc, sums[1] + ss]
-            b.stop(self.stop)
-            if b.t >= duration:
-                break
+            if opening_stop or phase != 0 or b.t > 0:
+                # The stop's samples: those at or after its start and before its end.
+                k0 = math.ceil(b.t * self.f - 1e-9)
+                k1 = math.ceil((b.t + self.stop) * self.f - 1e-9)
+                sc, ss = stop_sums(k0, k1, b.a)
+                sums = [sums[0] + sc, sums[1] + ss]
+                b.stop(self.stop)
+                if b.t >= duration:
+                    break
             if phase == 0:
                 fallbacks += self._variable_turn(b, sums, 0, +1.0, search)
             elif phase == 1:
@@ -613,14 +628,23 @@ class HeadingIsolation:
     mounting: np.ndarray | None = field(default=None, compare=False)
     name: str = "heading-isolation"
     count_rate: float = 4.0  # Hz at which table-rate reversals are counted
+    start: str = "stop"
+
+    def __post_init__(self) -> None:
+        _check_start(self.start)
 
     def _segments(self, h0: float, duration: float) -> list[tuple[float, float, float, str]]:
-        """``(duration, start heading, heading-rate sign, label)`` of every segment, in order."""
+        """``(duration, start heading, heading-rate sign, label)`` of every segment, in order.
+
+        With ``start="turn"`` the opening hold is left out: the run begins with the
+        first turn.
+        """
         turn = math.pi / self.rate
         pattern = [(-1.0, "180"), (-1.0, "360"), (+1.0, "180"), (+1.0, "0")]
-        segs = [(self.stop, h0, 0.0, "hold 0")]
         hold = max(self.stop, 0.0)  # the builder skips (and does not time) empty segments
-        t, h = hold, h0  # the builder's clock: t += each duration
+        first_hold = hold if self.start == "stop" else 0.0
+        segs = [(first_hold, h0, 0.0, "hold 0")]
+        t, h = first_hold, h0  # the builder's clock: t += each duration
         i = 0
         while t < duration:
             sign, lab = pattern[i % 4]

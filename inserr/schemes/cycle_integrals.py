@@ -27,7 +27,7 @@ from inserr.core.errors import InputError
 from inserr.core.imu import MISALIGNMENT_INDEX, MISALIGNMENTS
 from inserr.core.rotations import rot_x, rot_z
 from inserr.schemes.open_loop import TableScheme
-from inserr.schemes.vehicle_motion import Motion
+from inserr.schemes.vehicle_motion import Motion, heading_sign
 
 
 def f_z(x: float) -> np.ndarray:
@@ -327,8 +327,10 @@ def scenario_cycle(scen) -> tuple[TableScheme, Motion, str]:
     if h0 == 0.0 and m.pitch == 0.0 and m.roll == 0.0:
         desc = "level, heading 0 (body = ENU)"
     else:
+        # Written back in the scenario's declared sense (the motion holds clockwise).
+        k = heading_sign(scen.heading_convention)
         desc = (
-            f"heading {math.degrees(h0):g} deg, pitch {math.degrees(m.pitch):g} deg, "
+            f"heading {math.degrees(k * h0):g} deg, pitch {math.degrees(m.pitch):g} deg, "
             f"roll {math.degrees(m.roll):g} deg"
         )
     if type(m) is not Motion:

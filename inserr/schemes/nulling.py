@@ -243,6 +243,9 @@ class NullingTwoPosition:
         (heading periods of several ``Ts``) the stop lasts ``Ts``.
     name : str
         Scheme name used in reports.
+    start : str
+        ``"stop"`` (default): the run opens with a stop; ``"turn"``: with the first
+        turn (+180 deg), each stop then following its turn.
     """
 
     rate: float
@@ -253,6 +256,7 @@ class NullingTwoPosition:
     variant: str = "threshold"
     extension: float | None = None
     name: str = "nulling-two-position"
+    start: str = "stop"
 
     def __post_init__(self) -> None:
         if self.variant != "threshold":
@@ -268,6 +272,10 @@ class NullingTwoPosition:
         ext = self.extension
         if ext is not None and not (math.isfinite(ext) and ext >= 0):
             raise InputError("scheme.extension", f"must be >= 0 s, got {ext!r}")
+        if self.start not in ("stop", "turn"):
+            raise InputError(
+                "scheme.start", f"unknown opening phase {self.start!r}", "use one of: stop, turn"
+            )
 
     def _swing_seen(self, motion: Motion, times: list[float]) -> np.ndarray:
         """Whether the heading swing (peak to peak) over the history before each time reaches delta.
@@ -306,7 +314,7 @@ class NullingTwoPosition:
         known: dict[int, bool] = {}  # swing-test outcome of stop i, once tested
         guessed: list[int] = []  # stops whose outcome is guessed, not yet tested
         guess = True
-        t = 0.0
+        t = 0.0 if self.start == "stop" else turn_time  # after the opening turn
         while True:
             while t < duration and len(guessed) < SWING_BATCH:
                 i = len(starts)
@@ -362,6 +370,10 @@ class NullingTwoPosition:
         ext = self.stop if self.extension is None else self.extension
         periods = self._periods(motion, duration, turn_time, ext)
         b = ScheduleBuilder(0.0, 0.0, self.mounting)
+        # Turn k follows stop k; opening with a turn shifts the pattern by one.
+        first = 0 if self.start == "stop" else 1
+        if first:
+            b.rotate("outer", TURNS[0] * math.pi, self.rate, "turn +180")
         fallbacks = lengthened = 0
         for k, period in enumerate(periods):
             dwell, fallback = self._dwell(period, turn_time, ext)
@@ -370,7 +382,7 @@ class NullingTwoPosition:
             b.stop(dwell, f"stop {round(math.degrees(b.a)):+d}")
             if b.t >= duration:
                 break
-            d = TURNS[k % 4]
+            d = TURNS[(k + first) % 4]
             b.rotate("outer", d * math.pi, self.rate, "turn +180" if d > 0 else "turn -180")
         b.meta.update(
             fallbacks=fallbacks,

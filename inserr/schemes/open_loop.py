@@ -5,20 +5,29 @@ dwell), repeated: ``none``, ``continuous``, ``two-position``, ``four-position``,
 ``four-position-modified``, ``eight-position``, ``sixteen-position`` (the PSINS
 sixteen-position table), ``sixteen-position-inserr`` and ``custom`` differ only in
 their tables. Every scheme starts at t = 0 with a stop at its first position
-(``continuous`` with ``stop = 0`` has no opening stop because none was asked for).
+(``continuous`` with ``stop = 0`` has no opening stop because none was asked for),
+unless it is asked to start with its first turn (``start="turn"``, the scenario's
+``scheme.start``; :func:`with_start`), as P2 writes its cycle. A ``custom`` table
+opens with a stop of ``scheme.stop``, which may be zero (the run then opens with the
+table's first turn).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from inserr.core.errors import InputError
 from inserr.schemes.turntable import ScheduleBuilder, TableSchedule
 from inserr.schemes.vehicle_motion import Motion
 
 DEG = math.pi / 180.0
+
+#: Opening phases of a scheme (``scheme.start``): a stop at the first position (every
+#: scheme's default), or the first turn at once.
+SCHEME_STARTS = ("stop", "turn")
 
 
 @dataclass(frozen=True)
@@ -99,6 +108,29 @@ class TableScheme:
                 if b.t >= duration:
                     break
         return b.build(cycle=self.cycle_time)
+
+
+def with_start(scheme: TableScheme, start: str) -> TableScheme:
+    """``scheme`` with the opening phase ``start`` (one of :data:`SCHEME_STARTS`).
+
+    ``"turn"`` drops the opening stop (``first_dwell = 0``): the run begins with the
+    table's first step, and each cycle then ends with the stop at the start position.
+    A scheme without steps (``none``) has no turn to begin with and is returned as it is.
+
+    Raises
+    ------
+    InputError
+        For an unknown opening phase.
+    """
+    if start not in SCHEME_STARTS:
+        raise InputError(
+            "scheme.start",
+            f"unknown opening phase {start!r}",
+            f"use one of: {', '.join(SCHEME_STARTS)}",
+        )
+    if start == "stop" or not scheme.steps:
+        return scheme
+    return replace(scheme, first_dwell=0.0)
 
 
 def none_scheme(rate: float, stop: float) -> TableScheme:

@@ -8,6 +8,12 @@ position stays fixed: a moored ship yawing, a vehicle turning on the spot, a
 swinging-base test stand. Heading is clockwise from north, so a heading rate
 ``r`` is the angular velocity ``[0, 0, -r]`` in ENU.
 
+That is inserr's *internal* sense. A scenario may declare its headings and heading
+rates counter-clockwise from north instead (``motion.heading_convention``,
+:data:`HEADING_CONVENTIONS`); the scenario layer turns them into this sense
+(:func:`heading_sign`) before a motion is built, and :meth:`Motion.describe` writes
+them back in the declared sense. Nothing else in inserr sees the convention.
+
 Each motion also says where it is *piecewise constant-rate* (so the schedule can
 use exact single intervals) via :meth:`Motion.pieces`.
 """
@@ -21,6 +27,41 @@ import numpy as np
 
 from inserr.core.errors import InputError, require_finite
 from inserr.core.rotations import body_to_nav
+
+#: The senses in which a scenario may give headings, heading rates, yaw swings, heading
+#: histories and the IMU mounting heading (``motion.heading_convention``); the first is
+#: inserr's internal sense and the default.
+HEADING_CONVENTIONS = ("clockwise-from-north", "counter-clockwise-from-north")
+
+
+def heading_sign(convention: str) -> float:
+    """Factor from a heading (or heading rate) in ``convention`` to inserr's internal sense.
+
+    Parameters
+    ----------
+    convention : str
+        One of :data:`HEADING_CONVENTIONS`.
+
+    Returns
+    -------
+    float
+        +1 for ``"clockwise-from-north"``, -1 for ``"counter-clockwise-from-north"``
+        (its own inverse: the same factor converts back).
+
+    Raises
+    ------
+    InputError
+        For any other name.
+    """
+    if convention == HEADING_CONVENTIONS[0]:
+        return 1.0
+    if convention == HEADING_CONVENTIONS[1]:
+        return -1.0
+    raise InputError(
+        "motion.heading_convention",
+        f"unknown convention {convention!r}",
+        f"use one of: {', '.join(HEADING_CONVENTIONS)}",
+    )
 
 
 @dataclass(frozen=True)
@@ -182,10 +223,18 @@ class Motion:
         """
         return None
 
-    def describe(self) -> str:
-        """One-line human description (angles in degrees)."""
+    def describe(self, convention: str = HEADING_CONVENTIONS[0]) -> str:
+        """One-line human description, angles in degrees.
+
+        Parameters
+        ----------
+        convention : str
+            Sense in which headings and heading rates are written
+            (:data:`HEADING_CONVENTIONS`; the scenario's ``motion.heading_convention``).
+        """
+        k = heading_sign(convention)
         return (
-            f"static, heading {math.degrees(self.heading):g} deg, "
+            f"static, heading {math.degrees(k * self.heading):g} deg, "
             f"pitch {math.degrees(self.pitch):g} deg, "
             f"roll {math.degrees(self.roll):g} deg"
         )
@@ -269,12 +318,13 @@ class YawSwing(Motion):
         """
         return float(self.period) if self.amplitude != 0.0 else None
 
-    def describe(self):
-        """One-line human description (angles in degrees)."""
+    def describe(self, convention=HEADING_CONVENTIONS[0]):
+        """One-line human description, angles in degrees (see :meth:`Motion.describe`)."""
+        amp = heading_sign(convention) * self.amplitude
         return (
-            f"yaw swing {math.degrees(self.amplitude):g} deg/s peak, period {self.period:g} s "
+            f"yaw swing {math.degrees(amp):g} deg/s peak, period {self.period:g} s "
             "(heading amplitude "
-            f"{math.degrees(self.amplitude * self.period / (2 * math.pi)):.3g} deg), "
+            f"{math.degrees(amp * self.period / (2 * math.pi)):.3g} deg), "
             f"pitch {math.degrees(self.pitch):g} deg, roll {math.degrees(self.roll):g} deg"
         )
 
@@ -326,11 +376,12 @@ class Turn(Motion):
         """
         return 2.0 * math.pi / abs(self.rate) if self.rate != 0.0 else None
 
-    def describe(self):
-        """One-line human description (angles in degrees)."""
+    def describe(self, convention=HEADING_CONVENTIONS[0]):
+        """One-line human description, angles in degrees (see :meth:`Motion.describe`)."""
+        k = heading_sign(convention)
         return (
-            f"turn at {math.degrees(self.rate):g} deg/s "
-            f"from heading {math.degrees(self.heading):g} deg"
+            f"turn at {math.degrees(k * self.rate):g} deg/s "
+            f"from heading {math.degrees(k * self.heading):g} deg"
         )
 
 
@@ -426,8 +477,8 @@ class HeadingHistory(Motion):
         inner = self.times[(self.times > 0) & (self.times < duration)]
         return np.concatenate([[0.0], inner, [duration]]), True
 
-    def describe(self):
-        """One-line human description."""
+    def describe(self, convention=HEADING_CONVENTIONS[0]):
+        """One-line human description (the convention does not change it)."""
         return f"heading history of {len(self.times)} samples over {self.times[-1]:g} s"
 
 
