@@ -50,7 +50,9 @@ def _scenario(static: bool, hours: float = 72.0):
 
     changes = {**OUTPUTS, "scenario.duration": f"{hours:g} h"}
     if static:
-        changes["motion.type"] = "static"
+        # The swing's own keys back at their defaults: a static base reads neither.
+        changes.update({"motion.type": "static", "motion.amplitude": "0 deg/s",
+                        "motion.period": "60 s"})  # fmt: skip
     return load_scenario(P0).with_changes(changes)
 
 
@@ -104,17 +106,35 @@ def naive_seconds(scen, scheme: str) -> float:
     return (time.perf_counter() - t0) / SLICE * scen.duration * RATE_HZ
 
 
+#: Run in the child: ``inserr`` with the given arguments, then report the child's own peak
+#: resident memory. VmHWM belongs to the process image, so it starts afresh at exec;
+#: ``RUSAGE_CHILDREN`` would also count the benchmark's own pages copied at fork.
+_CHILD = (
+    "import sys\n"
+    "from inserr.cli.main import main\n"
+    "code = main(sys.argv[1:])\n"
+    "for line in open('/proc/self/status'):\n"
+    "    if line.startswith('VmHWM:'):\n"
+    "        print('peak_kb', int(line.split()[1]), file=sys.stderr)\n"
+    "sys.exit(code)\n"
+)
+
+
 def peak_memory_mb(hours: float, scheme: str) -> float:
     """Peak resident memory (MB) of ``inserr drift`` on P0's swinging base, own process."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    cmd = [
-        sys.executable, "-m", "inserr.cli.main", "drift", str(P0), "--duration", f"{hours:g}h",
-        "--scheme", scheme, "--step", "1", "--covariance-step", "60", "--json",
+    args = [
+        "drift", str(P0), "--duration", f"{hours:g}h", "--scheme", scheme,
+        "--step", "1", "--covariance-step", "60", "--json",
     ]  # fmt: skip
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    subprocess.run(cmd, check=True, capture_output=True, env=env)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    return max(after, before) / 1024.0  # ru_maxrss is in kB on Linux
+    proc = subprocess.run(
+        [sys.executable, "-c", _CHILD, *args], check=True, capture_output=True, env=env, text=True
+    )
+    for line in proc.stderr.splitlines():
+        if line.startswith("peak_kb"):
+            return int(line.split()[1]) / 1024.0
+    # No /proc (not Linux): the children's peak, an upper bound.
+    return resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
 
 
 def main(argv: list[str] | None = None) -> None:
