@@ -277,7 +277,10 @@ def test_every_study_report_names_its_version_and_scenario(
     # The file plus the flags, rebuilt as a dict, hash alike (a second route).
     same = as_scenario({**section, "site": {"latitude": "45 deg"}}, study)
     assert scenario_digest(same) == res["scenario_sha256"]
-    assert res["scenario_sha256"][:16] in (out / "report.md").read_text(encoding="utf-8")
+    page = (out / "report.md").read_text(encoding="utf-8")
+    assert res["scenario_sha256"][:16] in page
+    # The declared heading convention is echoed on every study's page (issue 15).
+    assert "Heading convention: clockwise-from-north" in page
 
 
 # --- the command line and packaging --------------------------------------------------------

@@ -81,7 +81,8 @@ def stamp(rep: Any, scen: Any, args: argparse.Namespace) -> Any:
     ``results.json`` gains the inserr version, the SHA-256 of the resolved scenario,
     the scenario file and its SHA-256 (when one was read) and the resolved scenario
     itself (every key, units as text); the page ends with the same line the drift
-    report opens with.
+    report opens with, and the scenario's declared heading convention (the drift
+    report has it in its set-up table).
 
     Parameters
     ----------
@@ -100,6 +101,8 @@ def stamp(rep: Any, scen: Any, args: argparse.Namespace) -> Any:
     where = f"scenario file `{prov['scenario_file']}`, " if "scenario_file" in prov else ""
     rep.paragraph(
         f"Written by inserr {prov['inserr_version']} from {where}resolved scenario "
-        f"SHA-256 `{prov['scenario_sha256'][:16]}…` (full digest in results.json)."
+        f"SHA-256 `{prov['scenario_sha256'][:16]}…` (full digest in results.json). "
+        f"Heading convention: {scen.heading_convention} (table angles right-handed about "
+        "their axes; docs/theory.md section 1)."
     )
     return rep
