@@ -106,3 +106,27 @@ def stamp(rep: Any, scen: Any, args: argparse.Namespace) -> Any:
         "their axes; docs/theory.md section 1)."
     )
     return rep
+
+
+def add_dask_flags(p: argparse.ArgumentParser) -> None:
+    """``--scheduler`` and ``--workers``: where a sweep or a design runs its batches.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The sub-command's parser (``sweep``, ``design``).
+    """
+    p.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="dask.distributed scheduler to submit to (tcp://HOST:PORT), or a local Dask "
+        "scheduler: processes (default), threads, sync",
+    )
+    p.add_argument(
+        "--workers",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="local worker processes (default: the CPUs available)",
+    )

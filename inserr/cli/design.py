@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-from inserr.cli.common import add_json_flag, emit, format_table, positive_int
+from inserr.cli.common import add_dask_flags, add_json_flag, emit, format_table
 from inserr.scenario.flags import DESIGN, DRIFT, add_flags, scenario_from_args
 
 
@@ -24,20 +24,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The ``design`` sub-command's parser.
     """
     add_flags(p, "drift", (*DRIFT, *DESIGN))
-    p.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDRESS",
-        help="dask.distributed scheduler to submit to (tcp://HOST:PORT), or a local Dask "
-        "scheduler: processes (default), threads, sync",
-    )
-    p.add_argument(
-        "--workers",
-        type=positive_int,
-        default=None,
-        metavar="N",
-        help="local worker processes (default: the CPUs available)",
-    )
+    add_dask_flags(p)
     p.add_argument(
         "--out",
         default=None,

@@ -86,21 +86,11 @@ def run(args: argparse.Namespace) -> int:
     int
         Exit status, 0 (bad input raises InputError, which the CLI turns into 2).
     """
-    from inserr.northfinder.inputs import northfinder_inputs
-    from inserr.northfinder.study import monte_carlo
+    from inserr.northfinder.api import northfind
 
     scen = scenario_from_args(args, "northfinder")
-    inp = northfinder_inputs(scen)
-    result = monte_carlo(
-        inp.pose,
-        inp.instrument,
-        inp.grade,
-        inp.duration,
-        n_runs=inp.runs,
-        seed=inp.seed,
-        latitude_known=inp.latitude_known,
-        hemisphere=inp.hemisphere,
-    )
+    study = northfind(scen)  # the notebook front door: one path for both
+    inp, result = study.inputs, study.result
     summary = {
         **result.summary(),
         "latitude_known": bool(inp.latitude_known),

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import argparse
 
-from inserr.cli.common import add_json_flag, emit, format_table, positive_int
+from inserr.cli.common import add_dask_flags, add_json_flag, emit, format_table
 from inserr.scenario.flags import DRIFT, add_flags, scenario_from_args
 
 #: Columns of the terminal table after the parameters (all are in results.csv).
@@ -33,20 +33,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The ``sweep`` sub-command's parser.
     """
     add_flags(p, "drift", (*DRIFT, "param"))
-    p.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDRESS",
-        help="dask.distributed scheduler to submit to (tcp://HOST:PORT), or a local Dask "
-        "scheduler: processes (default), threads, sync",
-    )
-    p.add_argument(
-        "--workers",
-        type=positive_int,
-        default=None,
-        metavar="N",
-        help="local worker processes (default: the CPUs available)",
-    )
+    add_dask_flags(p)
     p.add_argument(
         "--out",
         default=None,
