@@ -95,32 +95,53 @@ def phi1(z: np.ndarray) -> np.ndarray:
 class _OffsetTable:
     """``e^{lambda dt}`` and ``dt phi1(lambda dt)`` for many offsets ``dt`` (s).
 
-    Offsets on a grid ``k h`` (fine times inside windows that start on the fine grid)
-    are looked up in a table of the grid's multiples; the others are computed.
+    Fine output times on a uniform grid of step ``h`` sit, inside one window, at
+    offsets ``dt = delta + k h`` from its start, with one fraction ``delta`` per window
+    (``0 <= delta < h``) and integer ``k``. Then, exactly,
+
+    ``e^{lambda dt} = e^{lambda delta} e^{lambda k h}`` and
+    ``int_0^dt e^{lambda s} ds = int_0^{k h} e^{lambda s} ds + e^{lambda k h}
+    int_0^delta e^{lambda s} ds``,
+
+    so the transcendental functions are evaluated once per window and once per grid
+    multiple (a table), and every output costs a lookup and a product. Without a grid
+    (``h`` None) or a window index every offset is computed.
     """
 
-    def __init__(self, lam: np.ndarray, dt: np.ndarray, h: float | None):
+    def __init__(
+        self, lam: np.ndarray, dt: np.ndarray, h: float | None, window: np.ndarray | None = None
+    ):
         self.lam, self.dt = lam, dt
         self.k = None
-        if h is not None and len(dt):
-            k = np.rint(dt / h).astype(np.int64)
-            on_grid = np.abs(dt - k * h) <= 1e-9 * np.maximum(1.0, dt)
-            if np.all(on_grid) and k.max() <= 1_000_000:
-                self.k = k
-                grid = np.arange(k.max() + 1) * h
-                self._exp = np.exp(lam[None, :] * grid[:, None])
-                self._phi = grid[:, None] * phi1(lam[None, :] * grid[:, None])
+        if h is None or window is None or not len(dt):
+            return
+        # Runs of consecutive outputs in one window (outputs and windows are sorted).
+        first = np.flatnonzero(np.concatenate([[True], window[1:] != window[:-1]]))
+        run = np.repeat(np.arange(len(first)), np.diff(np.append(first, len(dt))))
+        delta = dt[first] - np.floor(dt[first] / h + 1e-9) * h
+        delta = np.where(delta < 0.0, 0.0, delta)
+        k = np.rint((dt - delta[run]) / h).astype(np.int64)
+        if np.any(np.abs(dt - delta[run] - k * h) > 1e-9 * np.maximum(1.0, dt)) or k.max() > 2**22:
+            return  # not a uniform grid inside the windows: compute every offset
+        self.k, self.run, self.first, self.delta = k, run, first, delta
+        grid = np.arange(k.max() + 1) * h
+        self._exp = np.exp(lam[None, :] * grid[:, None])
+        self._phi = grid[:, None] * phi1(lam[None, :] * grid[:, None])
+        d = delta[:, None]
+        self._exp_d = np.exp(lam[None, :] * d)
+        self._phi_d = d * phi1(lam[None, :] * d)
 
     def exp(self, sel: np.ndarray) -> np.ndarray:
         """``e^{lambda dt}`` at the offsets ``sel`` (index array), (len(sel), R)."""
         if self.k is not None:
-            return self._exp[self.k[sel]]
+            return self._exp[self.k[sel]] * self._exp_d[self.run[sel]]
         return np.exp(self.lam[None, :] * self.dt[sel, None])
 
     def phi(self, sel: np.ndarray) -> np.ndarray:
         """``dt phi1(lambda dt)`` at the offsets ``sel``, (len(sel), R)."""
         if self.k is not None:
-            return self._phi[self.k[sel]]
+            k = self.k[sel]
+            return self._phi[k] + self._exp[k] * self._phi_d[self.run[sel]]
         d = self.dt[sel, None]
         return d * phi1(self.lam[None, :] * d)
 
@@ -583,13 +604,12 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
         stop = _lifted_fine(run, modes, lift, t_fine, h, fine)  # all outputs after t0
     for lo in range(0, stop, CHUNK_FINE):
         tb = t_fine[lo : min(lo + CHUNK_FINE, stop)]
-        zb = np.empty((len(tb), modes.n_modes), dtype=complex)
         at_zero = tb <= MERGE
-        zb[at_zero] = z0
         inside = np.flatnonzero(~at_zero)
+        block = fine[lo : lo + len(tb)]
+        block[at_zero] = modes.to_nav(z0[None])[0]
         if len(inside):
-            zb[inside] = run.fine_states(tb[inside], h)
-        fine[lo : lo + len(tb)] = modes.to_nav(zb)
+            block[inside] = run.fine_nav(tb[inside], h)
 
     # Per source: modal inputs per coarse interval, then the scan over coarse intervals.
     z_src0 = modes.to_modes(sources.x0, axis=0)  # (R, N)
@@ -747,6 +767,11 @@ class _Run:
         # Modal input of every source per coarse interval (feature integrals are turned
         # into source inputs as they arrive: N sources take less room than 63 features).
         self.sources = sources
+        # Every source's modal input as a linear form in the 63 features, per mode.
+        eye = np.broadcast_to(np.eye(N_FEATURES)[:, None, :], (N_FEATURES, r, N_FEATURES))
+        self.source_form = np.ascontiguousarray(
+            np.moveaxis(_source_inputs(modes, eye, sources), 1, 0)
+        )  # (R, 63, N)
         self.inputs = np.zeros((len(t_coarse), r, sources.n), dtype=complex)
         self.u_still = np.zeros((nw, r), dtype=complex)  # constant input of still windows
         self.full: Windows | None = None  # the whole run's windows when lifted
@@ -755,7 +780,9 @@ class _Run:
 
     def _add_features(self, j: np.ndarray, y: np.ndarray) -> None:
         """Add feature integrals ``y`` (K, R, 63) of coarse intervals ``j`` (distinct)."""
-        self.inputs[j] += _source_inputs(self.modes, y, self.sources)
+        form = self.source_form  # (R, 63, N)
+        for r in range(form.shape[0]):
+            self.inputs[j, r, :] += y[:, r, :] @ form[r]
 
     # --- attitude at nodes ---------------------------------------------------------
     def _imu_features(self, t, piece):
@@ -782,8 +809,13 @@ class _Run:
         self.u_still[idx] = u
         self.incr[idx] = wt * u
         w = wt * self._to_coarse(win.b[idx], win.coarse[idx])
-        jj, sums = _group_sum(win.coarse[idx], w[:, :, None] * feats[:, None, :])
-        self._add_features(jj, sums)
+        # Real features: one real product per part of the per-source form, then the
+        # window weights (per mode) and the sum per coarse interval.
+        form = self.source_form  # (R, 63, N)
+        flat = np.moveaxis(form, 1, 0).reshape(N_FEATURES, -1)  # (63, R N)
+        per = (feats @ flat.real + 1j * (feats @ flat.imag)).reshape(len(idx), *form.shape[::2])
+        jj, sums = _group_sum(win.coarse[idx], per * w[:, :, None])
+        self.inputs[jj] += sums
 
     # --- rotation windows: constant angular velocity, closed forms ---------------------
     def rotation_windows(self) -> None:
@@ -835,6 +867,34 @@ class _Run:
         self.rotation_uk[idx] = uk
         self.rotation_nu = np.zeros((len(win.a), ROTATION_SAMPLES))
         self.rotation_nu[idx] = nu
+
+    def _rotation_integrals_on_grid(self, w, dt, h, run, delta) -> np.ndarray:
+        """:meth:`_rotation_integrals` at outputs ``dt = delta + k h`` (one delta per run).
+
+        ``int_0^{delta + k h} e^{mu s} ds = int_0^delta e^{mu s} ds + e^{mu delta}
+        int_0^{k h} e^{mu s} ds`` with ``mu = i nu - lambda``: the first factor once per
+        run (window), the last once per (turn rate, k) in a table.
+        """
+        lam = self.lam
+        harm = np.arange(-2, 3)
+        rates, cls = np.unique(np.rint(self.rotation_nu[w, -1] * 1e12), return_inverse=True)
+        cls = cls.reshape(-1)
+        runs, local = np.unique(run, return_inverse=True)
+        local = local.reshape(-1)
+        k = np.rint((dt - delta[run]) / h).astype(np.int64)
+        span = int(k.max()) + 1
+        nu = (rates * 1e-12 / 2.0)[:, None] * harm[None, :]  # (rates, 5) rad/s
+        mu = 1j * nu[:, :, None] - lam[None, None, :]  # (rates, 5, R)
+        grid = (np.arange(span) * h)[None, :, None, None]
+        tab = grid * phi1(mu[:, None] * grid)  # (rates, span, 5, R)
+        run_cls = np.empty(len(runs), dtype=np.int64)
+        run_cls[local] = cls
+        d = delta[runs][:, None, None]
+        mu_run = mu[run_cls]  # (runs, 5, R)
+        p_run = d * phi1(mu_run * d)
+        e_run = np.exp(mu_run * d)
+        vals = p_run[local] + e_run[local] * tab[cls, k]
+        return np.einsum("fkr,fkr->fr", self.rotation_uk[w], vals)
 
     def _rotation_integrals(self, w: np.ndarray, dt: np.ndarray, h: float | None) -> np.ndarray:
         """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine times of rotation windows."""
@@ -992,13 +1052,97 @@ class _Run:
             lo = hi
 
     # --- fine output times --------------------------------------------------------------
+    def fine_nav(self, t: np.ndarray, dt_fine: float | None) -> np.ndarray:
+        """Signed navigation errors at times ``t`` (s, > 0, increasing), (len(t), 9).
+
+        On a uniform output grid the homogeneous part of every window is one real
+        matrix product per window shape (:meth:`_nav_on_grid`); otherwise the modal
+        states of :meth:`fine_states` are mapped to navigation errors.
+        """
+        if dt_fine is None or not len(t):
+            return self.modes.to_nav(self.fine_states(t, dt_fine))
+        full = self.full if self.full is not None else self.win
+        wf = np.searchsorted(full.b, t - MERGE, side="left").clip(0, len(full.b) - 1)
+        w = self.src[wf] if self.src is not None else wf
+        dt = t - full.a[wf]
+        table = _OffsetTable(self.lam, dt, dt_fine, wf)
+        if table.k is None:
+            return self.modes.to_nav(self.fine_states(t, dt_fine))
+        return self._nav_on_grid(table, w, wf, dt, dt_fine)
+
+    def _nav_on_grid(self, table, w, wf, dt, dt_fine) -> np.ndarray:
+        """Navigation errors at outputs ``dt = delta + k h`` into their windows.
+
+        The state is ``e^{lambda k h} X + T_phi(k) U + e^{lambda k h} e^{lambda delta} J``
+        with ``X = e^{lambda delta} z_a (+ delta phi1(lambda delta) u)`` and ``U = u`` in a
+        still window (``U = 0`` otherwise; :class:`_OffsetTable`). The outputs of a window
+        sit at consecutive ``k = k0, k0 + 1, ...``, so the windows with the same first
+        offset ``k0`` and output count ``c`` share the real matrix that takes
+        ``(Re X, Im X, Re U, Im U)`` to the ``c`` navigation vectors
+        ``Re(V (w * (e^{lambda k h} X + T_phi(k) U)))``: one product per window shape.
+        The in-window integrals ``J`` of the other kinds are added afterwards.
+        """
+        modes, lam = self.modes, self.lam
+        n_r = len(lam)
+        run, k, first = table.run, table.k, table.first
+        counts = np.diff(np.append(first, len(k)))
+        w_run = w[first]
+        kind_run = self.win.kind[w_run]
+        ed = table._exp_d  # (runs, R)
+        still = kind_run == STILL
+        u_run = np.where(still[:, None], self.u_still[w_run], 0.0)
+        x_run = ed * self.z_start[wf[first]] + table._phi_d * u_run
+        coef = np.concatenate([x_run, u_run], axis=1).view(float)  # (runs, 4R): re, im pairs
+        vw = (modes.out * modes.weight[None, :]).T  # (R, 9): x = Re(sum_r z_r vw[r])
+        out = np.empty((len(k), 9))
+        k0 = k[first]
+        shapes, shape_of = np.unique(np.stack([k0, counts], axis=1), axis=0, return_inverse=True)
+        shape_of = shape_of.reshape(-1)
+        for g, (kk, c) in enumerate(shapes):
+            runs = np.flatnonzero(shape_of == g)
+            ks = np.arange(kk, kk + c)
+            mats = np.empty((2 * n_r, 2, c, 9))  # rows: (mode, X | U) x (re, im)
+            for part, tab in ((0, table._exp), (1, table._phi)):
+                a = tab[ks].T[:, :, None] * vw[:, None, :]  # (R, c, 9): e_r(k) vw[r]
+                mats[part * n_r : (part + 1) * n_r, 0] = a.real
+                mats[part * n_r : (part + 1) * n_r, 1] = -a.imag
+            vals = coef[runs] @ mats.reshape(4 * n_r, c * 9)  # (G, c 9)
+            pts = (first[runs][:, None] + np.arange(c)[None, :]).ravel()
+            out[pts] = vals.reshape(-1, 9)
+        # In-window integrals of the other kinds, added in modal form.
+        kind = kind_run[run]
+        other = np.flatnonzero(kind != STILL)
+        if len(other):
+            e = table._exp[k[other]] * ed[run[other]]
+            ints = np.empty((len(other), n_r), dtype=complex)
+            ko, wo, dto, wfo = kind[other], w[other], dt[other], wf[other]
+            rr = np.flatnonzero(ko == ROTATION)
+            if len(rr):
+                ints[rr] = self._rotation_integrals_on_grid(
+                    wo[rr], dto[rr], dt_fine, run[other][rr], table.delta
+                )
+            c = np.flatnonzero(ko == CACHED)
+            if len(c):
+                if fine_aligned(self.step, dt_fine):
+                    pos = np.clip(np.round(dto[c] / dt_fine).astype(int) - 1, 0, None)
+                    ints[c] = self._cached_integrals(wo[c], pos, dt_fine)
+                else:
+                    ints[c] = self._cached_integrals_anywhere(wo[c], dto[c])
+            d = np.flatnonzero(ko == DIRECT)
+            if len(d):
+                ints[d] = self._direct_integrals(wo[d], dto[d], wfo[d])
+            out[other] += modes.to_nav(e * ints)
+        return out
+
     def fine_states(self, t: np.ndarray, dt_fine: float | None) -> np.ndarray:
         """Signed modal states at times ``t`` (s, > 0, increasing), (len(t), R)."""
         full = self.full if self.full is not None else self.win
         wf = np.searchsorted(full.b, t - MERGE, side="left").clip(0, len(full.b) - 1)
         w = self.src[wf] if self.src is not None else wf  # the base window holding the data
         dt = t - full.a[wf]
-        table = _OffsetTable(self.lam, dt, dt_fine)
+        table = _OffsetTable(self.lam, dt, dt_fine, wf)
+        if table.k is not None:
+            return self._fine_on_grid(table, w, wf, dt, dt_fine)
         out = np.empty((len(t), len(self.lam)), dtype=complex)
         kind = self.win.kind[w]
         zs = self.z_start[wf]
@@ -1019,6 +1163,46 @@ class _Run:
         d = np.flatnonzero(kind == DIRECT)
         if len(d):
             out[d] = table.exp(d) * (zs[d] + self._direct_integrals(w[d], dt[d], wf[d]))
+        return out
+
+    def _fine_on_grid(self, table, w, wf, dt, dt_fine) -> np.ndarray:
+        """:meth:`fine_states` for outputs on a uniform grid, window by window.
+
+        With ``dt = delta + k h`` (:class:`_OffsetTable`) the state at an output is
+        ``e^{lambda k h} X + T_phi(k) u + e^{lambda k h} e^{lambda delta} J(t)``, where
+        ``X = e^{lambda delta} z_a (+ delta phi1(lambda delta) u in a still window)`` is
+        one value per window, ``u`` the constant input of a still window (0 otherwise)
+        and ``J`` the in-window integral of the other kinds: the per-output work is a
+        few lookups and products.
+        """
+        run, k, first = table.run, table.k, table.first
+        w_run = w[first]
+        kind_run = self.win.kind[w_run]
+        ed = table._exp_d  # (runs, R)
+        still = kind_run == STILL
+        x_run = ed * self.z_start[wf[first]]
+        e = table._exp[k]
+        if np.any(still):
+            u_run = np.where(still[:, None], self.u_still[w_run], 0.0)
+            x_run = x_run + table._phi_d * u_run
+            out = e * x_run[run] + table._phi[k] * u_run[run]
+        else:
+            out = e * x_run[run]
+        kind = kind_run[run]
+        rr = np.flatnonzero(kind == ROTATION)
+        if len(rr):
+            out[rr] += e[rr] * ed[run[rr]] * self._rotation_integrals(w[rr], dt[rr], dt_fine)
+        c = np.flatnonzero(kind == CACHED)
+        if len(c):
+            if fine_aligned(self.step, dt_fine):
+                pos = np.clip(np.round(dt[c] / dt_fine).astype(int) - 1, 0, None)
+                ints = self._cached_integrals(w[c], pos, dt_fine)
+            else:
+                ints = self._cached_integrals_anywhere(w[c], dt[c])
+            out[c] += e[c] * ed[run[c]] * ints
+        d = np.flatnonzero(kind == DIRECT)
+        if len(d):
+            out[d] += e[d] * ed[run[d]] * self._direct_integrals(w[d], dt[d], wf[d])
         return out
 
     def _cached_integrals(self, w: np.ndarray, pos: np.ndarray, dt_fine: float) -> np.ndarray:
