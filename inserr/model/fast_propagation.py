@@ -305,7 +305,12 @@ def make_windows(
     end = float(pieces.breaks[-1])
     extra = [t_coarse[(t_coarse > 0) & (t_coarse < end)]]
     if step is not None:
-        extra.append(np.arange(1, int(np.floor(end / step)) + 1) * step)
+        # The phase grid cuts only the pieces whose windows are reused by phase.
+        grid = np.arange(1, int(np.floor(end / step)) + 1) * step
+        at = np.clip(
+            np.searchsorted(pieces.breaks, grid, side="right") - 1, 0, len(pieces.still) - 1
+        )
+        extra.append(grid[_cacheable(pieces)[at]])
     cuts = np.unique(np.concatenate([pieces.breaks, *extra]))
     cuts = cuts[(cuts >= 0) & (cuts <= end)]
     cuts = cuts[np.concatenate([[True], np.diff(cuts) > MERGE])]
@@ -777,6 +782,7 @@ class _Run:
         self.full: Windows | None = None  # the whole run's windows when lifted
         self.src: np.ndarray | None = None  # their base windows
         self.nodes = 0
+        self._memo: dict = {}  # tables shared by the fine-output blocks
 
     def _add_features(self, j: np.ndarray, y: np.ndarray) -> None:
         """Add feature integrals ``y`` (K, R, 63) of coarse intervals ``j`` (distinct)."""
@@ -1029,7 +1035,7 @@ class _Run:
         self.direct_first[idx] = np.concatenate([[0], np.cumsum(win.n[idx])[:-1]])
         total = int(win.n[idx].sum())
         self.direct_t = np.empty(total)
-        self.direct_u = np.empty((total, len(lam)), dtype=complex)
+        self.direct_u = np.empty((total, len(lam)), dtype=complex)  # weighted, see below
         csum = np.cumsum(win.n[idx])
         lo = 0
         while lo < len(idx):
@@ -1048,7 +1054,11 @@ class _Run:
             jj, sums = _group_sum(win.coarse[sel], y * to_c[:, :, None])
             self._add_features(jj, sums)
             self.direct_t[base : base + len(nd.t)] = nd.t
-            self.direct_u[base : base + len(nd.t)] = u
+            # e^{-lambda (s - a)} u(s): what the fine outputs integrate (kept, not the input).
+            a_w = win.a[sel][nd.window]
+            self.direct_u[base : base + len(nd.t)] = u * np.exp(
+                -lam[None, :] * (nd.t - a_w)[:, None]
+            )
             lo = hi
 
     # --- fine output times --------------------------------------------------------------
@@ -1095,11 +1105,43 @@ class _Run:
         coef = np.concatenate([x_run, u_run], axis=1).view(float)  # (runs, 4R): re, im pairs
         vw = (modes.out * modes.weight[None, :]).T  # (R, 9): x = Re(sum_r z_r vw[r])
         out = np.empty((len(k), 9))
+        # Cached windows on the output grid start on it (delta = 0, k0 = 1) and hold one
+        # whole phase step: their in-window part is a block of navigation errors per
+        # (class, phase, table), added to the product of their shape (one zero block
+        # for the other windows of that shape).
+        kind = kind_run[run]
+        todo = kind != STILL
+        cached_block = cached_key = None
+        cached_run = kind_run == CACHED
+        if (
+            np.any(cached_run)
+            and fine_aligned(self.step, dt_fine)
+            and float(np.max(table.delta[cached_run], initial=0.0)) <= 1e-9
+        ):
+            # (|lambda| delta <= 1e-12: e^{lambda delta} = 1 to below round-off.)
+            nav = self._cached_nav_table(dt_fine)  # (C, m, nf, T, 9)
+            n_cls, m, nf, n_t = nav.shape[:4]
+            blocks = np.moveaxis(nav, 3, 2).reshape(n_cls * m * n_t, nf * 9)
+            cached_block = np.concatenate([blocks, np.zeros((1, nf * 9))])
+            wc = w_run[cached_run]
+            cached_key = np.full(len(first), len(blocks))
+            cached_key[cached_run] = (
+                self.cached_class[wc] * m + self.win.phase[wc]
+            ) * n_t + self.cached_table[wc]
+            whole = cached_run & (counts == nf) & (k[first] == 1)
+            if not np.all(whole[cached_run]):
+                cached_block = cached_key = None  # a cached window not whole on the grid
+            else:
+                todo &= kind != CACHED
         k0 = k[first]
-        shapes, shape_of = np.unique(np.stack([k0, counts], axis=1), axis=0, return_inverse=True)
+        span = int(counts.max()) + 1
+        shapes, shape_of = np.unique(k0 * span + counts, return_inverse=True)
         shape_of = shape_of.reshape(-1)
-        for g, (kk, c) in enumerate(shapes):
-            runs = np.flatnonzero(shape_of == g)
+        order = np.argsort(shape_of, kind="stable")
+        bounds = np.searchsorted(shape_of[order], np.arange(len(shapes) + 1))
+        for g, key in enumerate(shapes):
+            kk, c = divmod(int(key), span)
+            runs = order[bounds[g] : bounds[g + 1]]
             ks = np.arange(kk, kk + c)
             mats = np.empty((2 * n_r, 2, c, 9))  # rows: (mode, X | U) x (re, im)
             for part, tab in ((0, table._exp), (1, table._phi)):
@@ -1107,11 +1149,12 @@ class _Run:
                 mats[part * n_r : (part + 1) * n_r, 0] = a.real
                 mats[part * n_r : (part + 1) * n_r, 1] = -a.imag
             vals = coef[runs] @ mats.reshape(4 * n_r, c * 9)  # (G, c 9)
+            if cached_block is not None and kk == 1 and c == cached_block.shape[1] // 9:
+                vals += cached_block[cached_key[runs]]
             pts = (first[runs][:, None] + np.arange(c)[None, :]).ravel()
             out[pts] = vals.reshape(-1, 9)
         # In-window integrals of the other kinds, added in modal form.
-        kind = kind_run[run]
-        other = np.flatnonzero(kind != STILL)
+        other = np.flatnonzero(todo)
         if len(other):
             e = table._exp[k[other]] * ed[run[other]]
             ints = np.empty((len(other), n_r), dtype=complex)
@@ -1207,6 +1250,15 @@ class _Run:
 
     def _cached_integrals(self, w: np.ndarray, pos: np.ndarray, dt_fine: float) -> np.ndarray:
         """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine offsets ``pos`` of cached windows."""
+        vals = self._cached_offset_table(dt_fine)
+        return vals[self.cached_class[w], self.win.phase[w], pos, self.cached_table[w]]
+
+    def _cached_offset_table(self, dt_fine: float) -> np.ndarray:
+        """(C, m, nf, T, R): the in-window integral at every fine offset of every
+        (class, phase, table), computed once per run."""
+        key = ("offsets", dt_fine)
+        if key in self._memo:
+            return self._memo[key]
         n, s_nodes, fv = self.cached_template
         step, lam = self.step, self.lam
         nf = int(round(step / dt_fine))
@@ -1223,7 +1275,19 @@ class _Run:
             vals[..., r] = (
                 _apply_form(h.real, forms[:, r, :]) + 1j * _apply_form(h.imag, forms[:, r, :])
             ).reshape(n_cls, m, nf, -1)
-        return vals[self.cached_class[w], self.win.phase[w], pos, self.cached_table[w]]
+        self._memo[key] = vals
+        return vals
+
+    def _cached_nav_table(self, dt_fine: float) -> np.ndarray:
+        """(C, m, nf, T, 9): navigation errors of ``e^{lambda (f + 1) h} J_f`` for every
+        (class, phase, fine offset f, table) of the cached windows."""
+        key = ("nav", dt_fine)
+        if key not in self._memo:
+            vals = self._cached_offset_table(dt_fine)
+            nf = vals.shape[2]
+            e = np.exp(self.lam[None, :] * (np.arange(1, nf + 1) * dt_fine)[:, None])  # (nf, R)
+            self._memo[key] = self.modes.to_nav(vals * e[None, None, :, None, :])
+        return self._memo[key]
 
     def _cached_integrals_anywhere(self, w: np.ndarray, dt: np.ndarray) -> np.ndarray:
         """As :meth:`_cached_integrals` for fine times at any offset (grid not aligned).
@@ -1306,8 +1370,7 @@ class _Run:
     def _direct_g(self, wins: np.ndarray, m: int) -> np.ndarray:
         """``e^{-lambda (s - a)} u(s)`` at the nodes of direct windows ``wins`` (W, m, R)."""
         node = self.direct_first[wins][:, None] + np.arange(m)[None, :]
-        shift = self.direct_t[node] - self.win.a[wins][:, None]
-        return self.direct_u[node] * np.exp(-self.lam[None, None, :] * shift[..., None])
+        return self.direct_u[node]
 
 
 def _vehicle_forms(a_sig: np.ndarray, mats: np.ndarray) -> np.ndarray:

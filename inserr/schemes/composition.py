@@ -185,7 +185,11 @@ class ScheduleHistory:
         # vehicle still wobbles the tilt through the gimbal at its own bandwidth.
         iso = kind == "isolate"
         gimbal[iso] = np.abs(self.table.target_rate[k[iso]])
-        still = (kind == "stop") & (vehicle == 0.0)
+        # On a still vehicle an isolation hold is a stop in disguise: the table has nothing
+        # to cancel. (An isolation turn is not a constant-rate turn on a tilted vehicle:
+        # a constant heading rate about n's up axis needs a varying gimbal rate.)
+        iso_still = iso & (vehicle == 0.0)
+        still = ((kind == "stop") & (vehicle == 0.0)) | (iso_still & (gimbal == 0.0))
         stop = kind == "stop"
         table = np.full((len(k), 3, 3), np.nan)
         if np.any(stop):
