@@ -1361,9 +1361,19 @@ class _Run:
                 half = 0.5 * (win.b[w[sub]] - win.a[w[sub]])
                 ints = integral_of_series(dt[sub] / half - 1.0, int(m))  # (F, m)
                 inv = inverse.reshape(-1)
-                acc = np.zeros((len(sub), len(lam)), dtype=complex)
-                for k in range(int(m)):
-                    acc += ints[:, k, None] * coef[k][inv]
+                # acc[f] = sum_k ints[f, k] coef[k, window(f)]. The points of a window are
+                # consecutive: windows with the same output count are one batched product
+                # (cnt, m) @ (m, R) each, real and imaginary parts apart.
+                cw = np.ascontiguousarray(np.moveaxis(coef, 0, 1))  # (Ws, m, R)
+                first = np.flatnonzero(np.concatenate([[True], inv[1:] != inv[:-1]]))
+                cnt = np.diff(np.append(first, len(inv)))
+                acc = np.empty((len(sub), len(lam)), dtype=complex)
+                for c in np.unique(cnt):
+                    sel = np.flatnonzero(cnt == c)
+                    rows = (first[sel][:, None] + np.arange(c)[None, :]).ravel()
+                    a = ints[rows].reshape(len(sel), c, int(m))
+                    g = cw[inv[first[sel]]]  # (G, m, R)
+                    acc[rows] = (a @ g.real + 1j * (a @ g.imag)).reshape(-1, len(lam))
                 out[sub] = half[:, None] * acc
         return out
 
