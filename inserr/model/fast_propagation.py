@@ -1157,23 +1157,9 @@ class _Run:
         other = np.flatnonzero(todo)
         if len(other):
             e = table._exp[k[other]] * ed[run[other]]
-            ints = np.empty((len(other), n_r), dtype=complex)
-            ko, wo, dto, wfo = kind[other], w[other], dt[other], wf[other]
-            rr = np.flatnonzero(ko == ROTATION)
-            if len(rr):
-                ints[rr] = self._rotation_integrals_on_grid(
-                    wo[rr], dto[rr], dt_fine, run[other][rr], table.delta
-                )
-            c = np.flatnonzero(ko == CACHED)
-            if len(c):
-                if fine_aligned(self.step, dt_fine):
-                    pos = np.clip(np.round(dto[c] / dt_fine).astype(int) - 1, 0, None)
-                    ints[c] = self._cached_integrals(wo[c], pos, dt_fine)
-                else:
-                    ints[c] = self._cached_integrals_anywhere(wo[c], dto[c])
-            d = np.flatnonzero(ko == DIRECT)
-            if len(d):
-                ints[d] = self._direct_integrals(wo[d], dto[d], wfo[d])
+            ints = self._in_window(
+                kind[other], w[other], wf[other], dt[other], dt_fine, (run[other], table.delta)
+            )
             out[other] += modes.to_nav(e * ints)
         return out
 
@@ -1192,20 +1178,10 @@ class _Run:
         s = np.flatnonzero(kind == STILL)
         if len(s):
             out[s] = table.exp(s) * zs[s] + table.phi(s) * self.u_still[w[s]]
-        rr = np.flatnonzero(kind == ROTATION)
-        if len(rr):
-            out[rr] = table.exp(rr) * (zs[rr] + self._rotation_integrals(w[rr], dt[rr], dt_fine))
-        c = np.flatnonzero(kind == CACHED)
-        if len(c):
-            if fine_aligned(self.step, dt_fine):
-                pos = np.clip(np.round(dt[c] / dt_fine).astype(int) - 1, 0, None)
-                ints = self._cached_integrals(w[c], pos, dt_fine)
-            else:
-                ints = self._cached_integrals_anywhere(w[c], dt[c])
-            out[c] = table.exp(c) * (zs[c] + ints)
-        d = np.flatnonzero(kind == DIRECT)
-        if len(d):
-            out[d] = table.exp(d) * (zs[d] + self._direct_integrals(w[d], dt[d], wf[d]))
+        ns = np.flatnonzero(kind != STILL)
+        if len(ns):
+            ints = self._in_window(kind[ns], w[ns], wf[ns], dt[ns], dt_fine)
+            out[ns] = table.exp(ns) * (zs[ns] + ints)
         return out
 
     def _fine_on_grid(self, table, w, wf, dt, dt_fine) -> np.ndarray:
@@ -1232,21 +1208,36 @@ class _Run:
         else:
             out = e * x_run[run]
         kind = kind_run[run]
+        ns = np.flatnonzero(kind != STILL)
+        if len(ns):
+            ints = self._in_window(kind[ns], w[ns], wf[ns], dt[ns], dt_fine, (run[ns], table.delta))
+            out[ns] += e[ns] * ed[run[ns]] * ints
+        return out
+
+    def _in_window(self, kind, w, wf, dt, dt_fine, grid=None) -> np.ndarray:
+        """``J = int_a^t e^{-lambda (s - a)} u(s) ds`` at outputs of windows that are not
+        still (kinds ``kind``, base windows ``w``, run windows ``wf``, offsets ``dt``),
+        (len(dt), R). ``grid``: the outputs' runs and the runs' fractions ``delta`` on a
+        uniform output grid (:class:`_OffsetTable`), for the tabulated turn integrals."""
+        ints = np.empty((len(dt), len(self.lam)), dtype=complex)
         rr = np.flatnonzero(kind == ROTATION)
         if len(rr):
-            out[rr] += e[rr] * ed[run[rr]] * self._rotation_integrals(w[rr], dt[rr], dt_fine)
+            if grid is not None:
+                run, delta = grid
+                ints[rr] = self._rotation_integrals_on_grid(w[rr], dt[rr], dt_fine, run[rr], delta)
+            else:
+                ints[rr] = self._rotation_integrals(w[rr], dt[rr], dt_fine)
         c = np.flatnonzero(kind == CACHED)
         if len(c):
             if fine_aligned(self.step, dt_fine):
                 pos = np.clip(np.round(dt[c] / dt_fine).astype(int) - 1, 0, None)
-                ints = self._cached_integrals(w[c], pos, dt_fine)
+                ints[c] = self._cached_integrals(w[c], pos, dt_fine)
             else:
-                ints = self._cached_integrals_anywhere(w[c], dt[c])
-            out[c] += e[c] * ed[run[c]] * ints
+                ints[c] = self._cached_integrals_anywhere(w[c], dt[c])
         d = np.flatnonzero(kind == DIRECT)
         if len(d):
-            out[d] += e[d] * ed[run[d]] * self._direct_integrals(w[d], dt[d], wf[d])
-        return out
+            ints[d] = self._direct_integrals(w[d], dt[d], wf[d])
+        return ints
 
     def _cached_integrals(self, w: np.ndarray, pos: np.ndarray, dt_fine: float) -> np.ndarray:
         """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine offsets ``pos`` of cached windows."""
