@@ -197,7 +197,7 @@ class SourceSet:
 # ---------------------------------------------------------------------------------------
 # Windows
 # ---------------------------------------------------------------------------------------
-STILL, CACHED, DIRECT, ROTATION = 0, 1, 2, 3
+STILL, CACHED, DIRECT, ROTATION, PARTIAL = 0, 1, 2, 3, 4
 
 
 @dataclass(frozen=True)
@@ -330,8 +330,17 @@ def make_windows(
             & (np.abs(b - (k + 1) * step) < 1e3 * MERGE)
         )
         m = int(round(pieces.vehicle_period / step))
-        kind = np.where(whole, CACHED, kind)
-        phase = np.where(whole, k % m, -1)
+        # The rest of a stop seen through a fixed table (class 0): part of one phase step,
+        # integrated from the same phase template between the window's ends.
+        cell = np.floor(a / step + 1e-9).astype(int)
+        partial = (
+            fixed
+            & ~whole
+            & (pieces.phase_class[piece] == 0)
+            & (b <= (cell + 1) * step + 1e3 * MERGE)
+        )
+        kind = np.where(whole, CACHED, np.where(partial, PARTIAL, kind))
+        phase = np.where(whole, k % m, np.where(partial, cell % m, -1))
     # Products of two attitude matrices oscillate at twice the turn rate.
     rate = 2.0 * pieces.bandwidth[piece] + fastest_mode
     ph = np.where(kind == DIRECT, rate * (b - a), 0.0)
@@ -344,11 +353,12 @@ def make_windows(
         b2 = np.where(j == parts[rep] - 1, b[rep], a2 + length)
         a, b, piece, kind, phase, ph = a2, b2, piece[rep], kind[rep], phase[rep], (ph / parts)[rep]
     n = np.where(kind == DIRECT, points_for(ph), np.where(kind == ROTATION, ROTATION_SAMPLES, 1))
-    if np.any(kind == CACHED):
+    templ = (kind == CACHED) | (kind == PARTIAL)
+    if np.any(templ):
         # One template for every phase: sized by the largest bandwidth of a cached piece.
         fixed = _cacheable(pieces)
         cached_phase = (2.0 * float(pieces.bandwidth[fixed].max()) + fastest_mode) * step
-        n = np.where(kind == CACHED, points_for(np.array([cached_phase]))[0], n)
+        n = np.where(templ, points_for(np.array([cached_phase]))[0], n)
     coarse = np.searchsorted(t_coarse, b - MERGE, side="left")
     return Windows(a, b, piece, n.astype(int), kind, phase, coarse)
 
@@ -630,6 +640,7 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
             ("rotation", ROTATION),
             ("cached", CACHED),
             ("direct", DIRECT),
+            ("partial", PARTIAL),
         )
     }
     counts["periods"] = 0 if lift is None else int(round((t_coarse[-1] - lift[0]) / lift[1]))
@@ -938,7 +949,7 @@ class _Run:
         window. Every window of a (class, phase, table) then costs a lookup.
         """
         win, step, lam = self.win, self.step, self.lam
-        idx = np.flatnonzero(win.kind == CACHED)
+        idx = np.flatnonzero((win.kind == CACHED) | (win.kind == PARTIAL))
         if not len(idx):
             return
         n = int(win.n[idx[0]])
@@ -982,6 +993,16 @@ class _Run:
         nt = len(mats)
         # Signed input as a linear form in the template features, per table: A_M.
         forms = _vehicle_forms(self.a_sig, mats)  # (T, R, 63)
+        self.cached_forms = forms
+        self.cached_table = np.full(len(win.a), -1)
+        self.cached_table[idx] = inv
+        self.cached_class = np.full(len(win.a), -1)
+        self.cached_class[idx] = cls
+        whole = win.kind[idx] == CACHED
+        self._partial_windows(idx[~whole], inv[~whole], mats)
+        idx, cls, ph, inv = idx[whole], cls[whole], ph[whole], inv[whole]
+        if not len(idx):
+            return
         # Signed increment of every (class, phase, table): per mode one product.
         inc = np.empty((n_cls, m, nt, len(lam)), dtype=complex)
         for r in range(len(lam)):
@@ -1018,11 +1039,51 @@ class _Run:
             acc_imu = vehicle_to_imu(sums, mats[g_table[blk]])
             jj, sums_j = _group_sum(g_j[blk], acc_imu)
             self._add_features(jj, sums_j)
-        self.cached_forms = forms
-        self.cached_table = np.full(len(win.a), -1)
-        self.cached_table[idx] = inv
-        self.cached_class = np.full(len(win.a), -1)
-        self.cached_class[idx] = cls
+
+    def _partial_windows(self, idx: np.ndarray, inv: np.ndarray, mats: np.ndarray) -> None:
+        """Stops (class 0) that fill part of a phase step, from the phase template.
+
+        On the step ``[c, c + step]`` holding the window ``[a, b]`` the vehicle features
+        are the template's (Chebyshev points ``s_q``); the window's integrals are those of
+        the interpolant between ``a - c`` and ``b - c`` (differences of two rows of the
+        spectral integration matrix), then seen through the window's table as in
+        :meth:`cached_windows`: no attitude is sampled.
+        """
+        if not len(idx):
+            return
+        win, lam, step = self.win, self.lam, self.step
+        n, s_nodes, fv = self.cached_template
+        half = 0.5 * step
+        start = np.floor(win.a[idx] / step + 1e-9) * step
+        alpha, beta = win.a[idx] - start, win.b[idx] - start
+        jm = integration_matrix(np.concatenate([alpha, beta]) / half - 1.0, n) * half
+        dj = jm[len(idx) :] - jm[: len(idx)]  # (P, n): int_alpha^beta of each node's share
+        wq = dj[:, :, None] * np.exp(
+            lam[None, None, :] * (beta[:, None] - s_nodes[None, :])[..., None]
+        )
+        feats = fv[0, win.phase[idx]]  # (P, n, 63) vehicle features
+        wt = np.swapaxes(wq, 1, 2)  # (P, R, n)
+        y = np.matmul(wt.real, feats) + 1j * np.matmul(wt.imag, feats)  # (P, R, 63) to b
+        self.incr[idx] = np.einsum("prf,prf->pr", y, self.cached_forms[inv])
+        # Per source, per table: the source form seen in the vehicle features
+        # (vehicle_to_imu is linear: its matrix is its image of the unit features).
+        yc = y * self._to_coarse(win.b[idx], win.coarse[idx])[:, :, None]
+        tables = np.unique(inv)
+        if 8 * len(tables) > len(idx):
+            # Tables hardly repeat (a closed-loop rule stops anywhere): each window's
+            # integrals through its own table.
+            jj, sums = _group_sum(win.coarse[idx], vehicle_to_imu(yc, mats[inv]))
+            self._add_features(jj, sums)
+            return
+        form = self.source_form  # (R, 63, N)
+        for t in tables:
+            sel = np.flatnonzero(inv == t)
+            lt = vehicle_to_imu(np.eye(N_FEATURES)[None], mats[t][None])[0]  # (63 veh, 63 imu)
+            per = np.empty((len(sel), form.shape[0], form.shape[2]), dtype=complex)
+            for r in range(form.shape[0]):
+                per[:, r, :] = yc[sel, r, :] @ (lt @ form[r])
+            jj, sums = _group_sum(win.coarse[idx[sel]], per)
+            self.inputs[jj] += sums
 
     # --- direct windows: attitude sampled at each window's points ----------------------
     def direct_windows(self) -> None:
@@ -1237,6 +1298,16 @@ class _Run:
         d = np.flatnonzero(kind == DIRECT)
         if len(d):
             ints[d] = self._direct_integrals(w[d], dt[d], wf[d])
+        p = np.flatnonzero(kind == PARTIAL)
+        if len(p):
+            # J = e^{lambda alpha} (I(alpha + dt) - I(alpha)), I the template's integral
+            # from the start of the phase step.
+            wp = w[p]
+            alpha = self.win.a[wp] - np.floor(self.win.a[wp] / self.step + 1e-9) * self.step
+            both = self._cached_integrals_anywhere(
+                np.concatenate([wp, wp]), np.concatenate([alpha + dt[p], alpha])
+            )
+            ints[p] = np.exp(self.lam[None, :] * alpha[:, None]) * (both[: len(p)] - both[len(p) :])
         return ints
 
     def _cached_integrals(self, w: np.ndarray, pos: np.ndarray, dt_fine: float) -> np.ndarray:
@@ -1298,12 +1369,9 @@ class _Run:
         forms = self.cached_forms[t_]  # (K, R, 63)
         u = np.einsum("kqv,krv->kqr", fv[c_, p_], forms)  # (K, n, R) signed input at nodes
         g = u * np.exp(-lam[None, None, :] * s_nodes[None, :, None])
-        coef = np.tensordot(coefficient_matrix(n), g, axes=([1], [1]))  # (n, K, R)
+        coef = np.matmul(coefficient_matrix(n)[None], g)  # (K, n, R)
         ints = integral_of_series(dt / (0.5 * step) - 1.0, n)  # (F, n)
-        acc = np.zeros((len(w), len(lam)), dtype=complex)
-        for k in range(n):
-            acc += ints[:, k, None] * coef[k][inv]
-        return 0.5 * step * acc
+        return 0.5 * step * _apply_series(ints, inv, coef)
 
     def _direct_integrals(self, w: np.ndarray, dt: np.ndarray, wf: np.ndarray) -> np.ndarray:
         """``int_a^t e^{-lambda (s - a)} u(s) ds`` at fine times of direct windows.
@@ -1352,19 +1420,7 @@ class _Run:
                 half = 0.5 * (win.b[w[sub]] - win.a[w[sub]])
                 ints = integral_of_series(dt[sub] / half - 1.0, int(m))  # (F, m)
                 inv = inverse.reshape(-1)
-                # acc[f] = sum_k ints[f, k] coef[k, window(f)]. The points of a window are
-                # consecutive: windows with the same output count are one batched product
-                # (cnt, m) @ (m, R) each, real and imaginary parts apart.
-                cw = np.ascontiguousarray(np.moveaxis(coef, 0, 1))  # (Ws, m, R)
-                first = np.flatnonzero(np.concatenate([[True], inv[1:] != inv[:-1]]))
-                cnt = np.diff(np.append(first, len(inv)))
-                acc = np.empty((len(sub), len(lam)), dtype=complex)
-                for c in np.unique(cnt):
-                    sel = np.flatnonzero(cnt == c)
-                    rows = (first[sel][:, None] + np.arange(c)[None, :]).ravel()
-                    a = ints[rows].reshape(len(sel), c, int(m))
-                    g = cw[inv[first[sel]]]  # (G, m, R)
-                    acc[rows] = (a @ g.real + 1j * (a @ g.imag)).reshape(-1, len(lam))
+                acc = _apply_series(ints, inv, np.ascontiguousarray(np.moveaxis(coef, 0, 1)))
                 out[sub] = half[:, None] * acc
         return out
 
@@ -1372,6 +1428,26 @@ class _Run:
         """``e^{-lambda (s - a)} u(s)`` at the nodes of direct windows ``wins`` (W, m, R)."""
         node = self.direct_first[wins][:, None] + np.arange(m)[None, :]
         return self.direct_u[node]
+
+
+def _apply_series(ints: np.ndarray, inv: np.ndarray, coef: np.ndarray) -> np.ndarray:
+    """``acc[f] = sum_k ints[f, k] coef[inv[f], k]``: (F, R) complex.
+
+    ``ints`` (F, n) real are the integrated Chebyshev polynomials at the outputs, ``coef``
+    (K, n, R) the series of each window (or key). Outputs of one key usually come in
+    runs (consecutive times of one window): runs of the same length are one batched
+    product (c, n) @ (n, R), real and imaginary parts apart.
+    """
+    first = np.flatnonzero(np.concatenate([[True], inv[1:] != inv[:-1]]))
+    cnt = np.diff(np.append(first, len(inv)))
+    acc = np.empty((len(inv), coef.shape[2]), dtype=complex)
+    for c in np.unique(cnt):
+        sel = np.flatnonzero(cnt == c)
+        rows = (first[sel][:, None] + np.arange(c)[None, :]).ravel()
+        a = ints[rows].reshape(len(sel), c, ints.shape[1])
+        g = coef[inv[first[sel]]]  # (G, n, R)
+        acc[rows] = (a @ g.real + 1j * (a @ g.imag)).reshape(-1, coef.shape[2])
+    return acc
 
 
 def _vehicle_forms(a_sig: np.ndarray, mats: np.ndarray) -> np.ndarray:
