@@ -24,7 +24,6 @@ from inserr.design.motions import (
     held_out_motions,
     random_motions,
 )
-from inserr.design.objective import Horizon
 from inserr.design.search import Evaluator, Request, family_candidate
 from inserr.scenario.schema import scenario_from_dict
 
@@ -267,8 +266,8 @@ def test_golden_design_is_deterministic_and_resumes(tmp_path, monkeypatch):
     from inserr.scenario.schema import load_scenario
 
     written = load_scenario(out / study.CHOSEN_TOML)
-    mine = build_family(scen).decode(ref.chosen.desc["vars"]).scheme.plan(
-        scen.motion, scen.duration
+    mine = (
+        build_family(scen).decode(ref.chosen.desc["vars"]).scheme.plan(scen.motion, scen.duration)
     )
     theirs = written.scheme().plan(written.motion, written.duration)
     assert np.array_equal(mine.t0, theirs.t0) and np.array_equal(mine.a0, theirs.a0)
