@@ -271,3 +271,23 @@ def test_golden_design_is_deterministic_and_resumes(tmp_path, monkeypatch):
     )
     theirs = written.scheme().plan(written.motion, written.duration)
     assert np.array_equal(mine.t0, theirs.t0) and np.array_equal(mine.a0, theirs.a0)
+
+
+def test_breakdown_is_the_budget_of_the_peak():
+    """The per-source budget at the peak: its root sum of squares is the RMS the objective
+    reports (unknown independent signs), and no output time has a larger RMS."""
+    from inserr.design.motions import build_motion
+    from inserr.design.objective import ErrorBudget
+
+    scen = scenario(duration="1 h")
+    st = study.design_settings(scen)
+    dec = st.family.decode(st.family.round(st.family.start()))
+    budget = ErrorBudget(scen, st.full.exclude)
+    motion = build_motion(st.motions[1].spec)
+    table = dec.scheme.plan(motion, st.full.duration)
+    t, rms, src = budget.breakdown(table, motion, st.full)
+    assert rms == pytest.approx(budget.rms_nmi(table, motion, st.full), rel=1e-12)
+    assert math.sqrt(sum(v**2 for _, v in src)) == pytest.approx(rms, rel=1e-12)
+    assert [v for _, v in src] == sorted((v for _, v in src), reverse=True)
+    assert "gyro_bias_z" not in {n for n, _ in src}  # excluded by default
+    assert 0 < t <= st.full.duration
