@@ -239,7 +239,7 @@ def test_golden_cycles_are_balanced_and_break_the_resonance():
 def test_golden_design_is_deterministic_and_resumes(tmp_path, monkeypatch):
     """Grid + draws with the golden family: the same seed gives the same result, and an
     interrupted design resumed from its directory gives the same front."""
-    scen = scenario(family="single-axis-golden")
+    scen = scenario(family="single-axis-golden", duration="1 h")
     ref = study.run_design(scen, out_dir=None, scheduler="sync")
     again = study.run_design(scen, out_dir=None, scheduler="sync")
     assert comparable(again.results) == comparable(ref.results)

@@ -52,11 +52,13 @@ QUICK = {
     "design.screen_duration": "6 h",
 }
 STATIC = {"design.motions": "scenario", "design.held_out": 0}
-#: The closed-loop design: three variables, so a smaller budget than the open-loop one.
+#: The closed-loop design: three variables, so a smaller population and budget (its
+#: candidates plan a closed-loop rule on every motion: the costly part).
 NULLING = {
     "design.family": "nulling",
     "design.extension_range": "1200, 2400 s",
-    "design.budget": 120,
+    "design.budget": 60,
+    "design.population": 10,
 }
 
 

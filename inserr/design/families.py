@@ -304,7 +304,9 @@ class SingleAxisGolden(SingleAxis):
     every cycle at the same phase only if its period divides both ``L_A`` and ``L_B``,
     which the stretch keeps away from the long periods that matter. The variables are
     the single-axis ones plus ``stretch``; the table lists every cycle of the run
-    (``horizon`` s) and is still an open-loop table.
+    (``horizon`` s) and is still an open-loop table. A B cycle stretched by less than
+    half the asked ``stretch - 1`` (stops at the top of the range cannot grow) breaks
+    the family's rules.
     """
 
     name = "single-axis-golden"
@@ -324,6 +326,11 @@ class SingleAxisGolden(SingleAxis):
         if len(p) == 0:
             return Decoded(None, {}, violation, "no turn")
         d_b = self._balanced(p, d * stretch, rate_deg, violation)
+        # Stops at the top of the range cannot stretch, and balancing may pull B back onto
+        # A: a B cycle less than half as stretched as asked is the repeated cycle again.
+        gain = float(np.sum(d_b) / np.sum(d)) - 1.0
+        if gain < 0.5 * (stretch - 1.0):
+            violation["stretch"] = 1.0 - gain / (0.5 * (stretch - 1.0))
         turn = float(np.sum(np.abs(np.diff(np.append(p, p[0]))))) / rate_deg
         shortest = min(float(np.sum(d)), float(np.sum(d_b))) + turn
         count = int(math.ceil(self.settings["horizon"] / shortest)) + 1
