@@ -1058,12 +1058,19 @@ class _Run:
         alpha, beta = win.a[idx] - start, win.b[idx] - start
         jm = integration_matrix(np.concatenate([alpha, beta]) / half - 1.0, n) * half
         dj = jm[len(idx) :] - jm[: len(idx)]  # (P, n): int_alpha^beta of each node's share
-        wq = dj[:, :, None] * np.exp(
-            lam[None, None, :] * (beta[:, None] - s_nodes[None, :])[..., None]
-        )
-        feats = fv[0, win.phase[idx]]  # (P, n, 63) vehicle features
-        wt = np.swapaxes(wq, 1, 2)  # (P, R, n)
-        y = np.matmul(wt.real, feats) + 1j * np.matmul(wt.imag, feats)  # (P, R, 63) to b
+        # y[p] = e^{lambda beta_p} sum_q dj[p, q] e^{-lambda s_q} F[phase_p, q]: the template
+        # weighted by e^{-lambda s_q} once per phase, then one real product per phase
+        # (complex entries as pairs of reals) instead of one small product per window.
+        nr = len(lam)
+        tmpl = np.exp(-lam[None, :, None] * s_nodes[:, None, None]) * fv[0][:, :, None, :]
+        tmpl = tmpl.view(float).reshape(fv.shape[1], n, nr * 2 * N_FEATURES)  # (m, n, 2 R 63)
+        ph = win.phase[idx]
+        order = np.argsort(ph, kind="stable")
+        cuts = np.flatnonzero(ph[order][1:] != ph[order][:-1]) + 1
+        y = np.empty((len(idx), nr, N_FEATURES), dtype=complex)
+        for sel in np.split(order, cuts):
+            y[sel] = (dj[sel] @ tmpl[ph[sel[0]]]).view(complex).reshape(len(sel), nr, N_FEATURES)
+        y *= np.exp(lam[None, :] * beta[:, None])[:, :, None]  # (P, R, 63) to b
         self.incr[idx] = np.einsum("prf,prf->pr", y, self.cached_forms[inv])
         # Per source, per table: the source form seen in the vehicle features
         # (vehicle_to_imu is linear: its matrix is its image of the unit features).
@@ -1080,8 +1087,8 @@ class _Run:
             sel = np.flatnonzero(inv == t)
             lt = vehicle_to_imu(np.eye(N_FEATURES)[None], mats[t][None])[0]  # (63 veh, 63 imu)
             per = np.empty((len(sel), form.shape[0], form.shape[2]), dtype=complex)
-            for r in range(form.shape[0]):
-                per[:, r, :] = yc[sel, r, :] @ (lt @ form[r])
+            for k in range(form.shape[0]):
+                per[:, k, :] = yc[sel, k, :] @ (lt @ form[k])
             jj, sums = _group_sum(win.coarse[idx[sel]], per)
             self.inputs[jj] += sums
 

@@ -336,6 +336,14 @@ class _TurnSearch:
         hdot = heading_rate_bound(motion)
         lo, hi = self.geo.slope_bounds()
         self.lipschitz = None
+        self.roundoff = None  # bound of |closed form - sampled| of cos psi, sin psi
+        # The fallback's turn: the samples short of a whole revolution.
+        self.n_short = ns = int(np.count_nonzero(rule.rate * j / f < 2 * math.pi - 1e-9))
+        # The closed form's terms along those samples: e^{i a} = e^{i a0} e^{i da}, so
+        # up e^{i a} + um e^{-i a} = e^{i a0} (up e^{i da}) + e^{-i a0} (um e^{-i da}).
+        up, um, _ = self.geo.coefficients
+        turn = {d: np.exp(1j * self.da[d][:ns]) for d in (1.0, -1.0)}
+        self.short_terms = {d: (up * e, um * np.conj(e)) for d, e in turn.items()}
         if hdot is None or not math.isfinite(hi) or self.per_turn < 2:
             return
         self.lipschitz = lip = hdot + w * max(abs(lo), abs(hi))  # rad/s
@@ -345,6 +353,9 @@ class _TurnSearch:
         # unnormalised closed form is off by at most 1 - min_horizontal.
         t_max = duration + rule.stop + 2 * math.pi / w
         slack = 1e-12 * (10.0 + abs(motion.heading) + 2.0 * hdot * t_max)
+        # The closed form divides by |w| >= min_horizontal: round-off grows by its inverse.
+        min_h = self.geo.min_horizontal()
+        self.roundoff = slack / min_h if min_h > 0 else None
         # The coarse look keeps only the larger of the exp(+-i a) terms of the closed
         # form, unnormalised: off by at most the others plus 1 - min_horizontal.
         up, um, cz = self.geo.coefficients
@@ -468,13 +479,58 @@ class _TurnSearch:
         return None
 
     def best_sample(self, t0, a0, direction, which, c, s_other) -> int:
-        """The fallback's sample number: the best sample of one turn (class docstring)."""
-        main, other = self.values(t0, a0, direction, which, self.j)
-        expr = main + c
-        sign_ok = (np.sign(other) == -s_other) | (s_other == 0)
+        """The fallback's sample number: the best sample of one turn (class docstring).
+
+        The choice is the sampled rule's (:func:`_best_sample` on :meth:`values` of the
+        whole turn). Where a round-off bound is known the turn is first looked at in
+        closed form (:meth:`OuterAxisHeading.phasor`, within ``tol`` of the sampled
+        values), and :meth:`values` is computed only at the samples that can decide
+        the choice: those whose sign condition is in doubt, those that can be the
+        turn's largest or smallest score (they set the tie tolerance), and those that
+        can be the best or tie with it.
+        """
+        ns = self.n_short
+        if self.roundoff is None:
+            main, other = self.values(t0, a0, direction, which, self.j)
+            expr = main[:ns] + c
+            sign_ok = (np.sign(other[:ns]) == -s_other) | (s_other == 0)
+            return _best_sample(np.abs(expr), sign_ok) + 1
         # A fallback never takes a whole revolution (it would only return to the start).
-        short = self.rule.rate * self.j / self.rule.f < 2 * math.pi - 1e-9
-        return _best_sample(np.abs(expr[short]), sign_ok[short]) + 1
+        t = t0 + self.dt[:ns]
+        plus, minus = self.short_terms[direction]
+        e0 = cmath.exp(1j * a0)
+        w = plus * e0 + minus * e0.conjugate() + self.geo.coefficients[2]
+        psi = np.exp(1j * self.motion.heading_at(t)) * w
+        psi /= np.abs(w)
+        main, other = (psi.real, psi.imag) if which == 0 else (psi.imag, psi.real)
+        score = np.abs(main + c)
+        tol = self.roundoff + 1e-12 * abs(a0)  # |closed form - sampled|, main and other
+        # Samples whose sign condition the closed form cannot decide.
+        if s_other == 0:
+            sure, doubt = np.ones(ns, dtype=bool), np.zeros(ns, dtype=bool)
+        else:
+            side = -s_other * other
+            sure, doubt = side > tol, np.abs(side) <= tol
+        top = score >= score.max() - 2 * tol
+        bottom = score <= score.min() + 2 * tol
+        need = np.flatnonzero(doubt | top | bottom)
+        ex_main, ex_other = self.values(t0, a0, direction, which, need + 1)
+        exact = np.full(ns, np.nan)
+        exact[need] = np.abs(ex_main + c)
+        ok = sure.copy()
+        ok[need] = (np.sign(ex_other) == -s_other) | (s_other == 0)
+        ok &= sure | doubt  # the others fail the condition for certain
+        pool = ok if ok.any() else np.ones(ns, dtype=bool)
+        # _best_sample's tie tolerance from the exact range of the scores.
+        tie = max(1e-12, 1e-9 * float(np.nanmax(exact[top]) - np.nanmin(exact[bottom])))
+        cand = pool & (score <= score[pool].min() + 2 * tol + tie)
+        rest = np.flatnonzero(cand & np.isnan(exact))
+        if len(rest):
+            ex_main, _ = self.values(t0, a0, direction, which, rest + 1)
+            exact[rest] = np.abs(ex_main + c)
+        sel = np.flatnonzero(cand)
+        vals = exact[sel]
+        return int(sel[np.flatnonzero(vals <= vals.min() + tie)[0]]) + 1
 
 
 @dataclass(frozen=True)
