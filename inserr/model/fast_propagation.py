@@ -1170,6 +1170,15 @@ class _Run:
         still = kind_run == STILL
         u_run = np.where(still[:, None], self.u_still[w_run], 0.0)
         x_run = ed * self.z_start[wf[first]] + table._phi_d * u_run
+        partial = self._partial_on_grid(kind_run, w_run, table, dt_fine)
+        if partial is not None:
+            # A partial stop [a, b] inside the phase step from c = a - alpha: its in-window
+            # part is e^{lambda dt} J(dt) = e^{lambda (alpha + dt)} I(alpha + dt) -
+            # e^{lambda dt} e^{lambda alpha} I(alpha), I the template's integral from c.
+            # The second term joins the window's start state; the first is the cached
+            # windows' tabulated block at the output's offset (alpha + dt) / h from c.
+            p_run, shift, _ = partial
+            x_run[p_run] -= ed[p_run] * shift
         coef = np.concatenate([x_run, u_run], axis=1).view(float)  # (runs, 4R): re, im pairs
         vw = (modes.out * modes.weight[None, :]).T  # (R, 9): x = Re(sum_r z_r vw[r])
         out = np.empty((len(k), 9))
@@ -1221,6 +1230,11 @@ class _Run:
                 vals += cached_block[cached_key[runs]]
             pts = (first[runs][:, None] + np.arange(c)[None, :]).ravel()
             out[pts] = vals.reshape(-1, 9)
+        if partial is not None:
+            p_run, _, rows = partial
+            pts = np.flatnonzero(np.isin(run, np.flatnonzero(p_run)))
+            out[pts] += rows(pts, run, dt)
+            todo &= kind != PARTIAL
         # In-window integrals of the other kinds, added in modal form.
         other = np.flatnonzero(todo)
         if len(other):
@@ -1230,6 +1244,37 @@ class _Run:
             )
             out[other] += modes.to_nav(e * ints)
         return out
+
+    def _partial_on_grid(self, kind_run, w_run, table, dt_fine):
+        """Partial stops on an output grid aligned with the phase steps, for
+        :meth:`_nav_on_grid`: ``(runs, shift, rows)`` or None.
+
+        ``runs`` marks the runs in partial windows, ``shift`` (their count, R) is
+        ``e^{lambda alpha} I(alpha)`` of each (taken off the start state), and
+        ``rows(pts, run, dt)`` gives the tabulated navigation errors
+        ``e^{lambda (alpha + dt)} I(alpha + dt)`` of outputs ``pts``.
+        """
+        p_run = kind_run == PARTIAL
+        if not np.any(p_run) or not fine_aligned(self.step, dt_fine):
+            return None
+        wp = w_run[p_run]
+        alpha = self.win.a[wp] - np.floor(self.win.a[wp] / self.step + 1e-9) * self.step
+        shift = np.exp(self.lam[None, :] * alpha[:, None]) * self._cached_integrals_anywhere(
+            wp, alpha
+        )
+        nav = self._cached_nav_table(dt_fine)  # (C, m, nf, T, 9)
+        n_cls, m, nf, n_t = nav.shape[:4]
+        flat = nav.reshape(-1, 9)
+        alpha_run = np.zeros(len(w_run))
+        alpha_run[p_run] = alpha
+
+        def rows(pts, run, dt):
+            wq = w_run[run[pts]]
+            pos = np.rint((alpha_run[run[pts]] + dt[pts]) / dt_fine).astype(int)  # 1..nf
+            key = ((self.cached_class[wq] * m + self.win.phase[wq]) * nf + pos - 1) * n_t
+            return flat[key + self.cached_table[wq]]
+
+        return p_run, shift, rows
 
     def fine_states(self, t: np.ndarray, dt_fine: float | None) -> np.ndarray:
         """Signed modal states at times ``t`` (s, > 0, increasing), (len(t), R)."""
