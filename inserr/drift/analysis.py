@@ -109,7 +109,7 @@ class DriftResult:
     @cached_property
     def worst_horizontal(self) -> np.ndarray:
         """Horizontal error of the worst sign combination at each coarse time, m."""
-        return worst_case_norm(self.source_horizontal)[0]
+        return worst_case_norm(self.source_horizontal, signs=False)[0]
 
 
 def output_grid(duration: float, step: float) -> np.ndarray:
