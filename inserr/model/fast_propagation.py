@@ -1190,26 +1190,21 @@ class _Run:
         todo = kind != STILL
         cached_block = cached_key = None
         cached_run = kind_run == CACHED
-        if (
-            np.any(cached_run)
-            and fine_aligned(self.step, dt_fine)
-            and float(np.max(table.delta[cached_run], initial=0.0)) <= 1e-9
-        ):
-            # (|lambda| delta <= 1e-12: e^{lambda delta} = 1 to below round-off.)
+        if np.any(cached_run) and fine_aligned(self.step, dt_fine):
             nav = self._cached_nav_table(dt_fine)  # (C, m, nf, T, 9)
             n_cls, m, nf, n_t = nav.shape[:4]
             blocks = np.moveaxis(nav, 3, 2).reshape(n_cls * m * n_t, nf * 9)
             cached_block = np.concatenate([blocks, np.zeros((1, nf * 9))])
-            wc = w_run[cached_run]
+            # Only windows whose outputs are all in this block and on the grid from its
+            # start (|lambda| delta <= 1e-12: e^{lambda delta} = 1 to below round-off);
+            # one cut by the block's edge keeps its in-window integrals.
+            whole = cached_run & (counts == nf) & (k[first] == 1) & (table.delta <= 1e-9)
+            wc = w_run[whole]
             cached_key = np.full(len(first), len(blocks))
-            cached_key[cached_run] = (
+            cached_key[whole] = (
                 self.cached_class[wc] * m + self.win.phase[wc]
             ) * n_t + self.cached_table[wc]
-            whole = cached_run & (counts == nf) & (k[first] == 1)
-            if not np.all(whole[cached_run]):
-                cached_block = cached_key = None  # a cached window not whole on the grid
-            else:
-                todo &= kind != CACHED
+            todo &= ~whole[run]
         k0 = k[first]
         span = int(counts.max()) + 1
         shapes, shape_of = np.unique(k0 * span + counts, return_inverse=True)
