@@ -58,3 +58,21 @@ def test_rotation_matrix_conventions():
     r = rot_axis(axis, 0.7)
     assert np.allclose(log_so3(r), 0.7 * axis)
     assert np.allclose(r @ r.T, np.eye(3)) and np.linalg.det(r) == pytest.approx(1.0)
+
+
+def test_batched_heading_rotations_equal_the_matrix_products():
+    """The composition's row/column forms of ``rot_z(h) @ M`` and ``M @ rot_z(a)`` (no
+    matrix product per time) against the products of :func:`rot_z` matrices, for a
+    general (not orthogonal, not symmetric) M: a swapped sign or a transposed rotation
+    is an O(1) difference."""
+    from inserr.schemes.composition import _rot_z_times, _times_rot_z
+
+    rng = np.random.default_rng(11)
+    angles = rng.uniform(-10.0, 10.0, size=50)
+    m = rng.normal(size=(3, 3))
+    ms = rng.normal(size=(50, 3, 3))
+    left = np.array([rot_z(h) @ m for h in angles])
+    right = np.array([mm @ rot_z(a) for mm, a in zip(ms, angles, strict=True)])
+    # Same products, different order of additions: a few ulp.
+    np.testing.assert_allclose(_rot_z_times(angles, m), left, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(_times_rot_z(ms, angles), right, rtol=0, atol=1e-14)
