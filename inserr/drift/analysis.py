@@ -39,6 +39,7 @@ from inserr.model.exact_propagation import Output, propagate_covariance, propaga
 from inserr.model.fast_propagation import (
     constant_error_response,
     gauss_markov_covariance,
+    single_thread_blas,
     white_noise_covariance,
 )
 from inserr.model.psi_model import DR, ErrorModel, Layout, attitude_error
@@ -198,6 +199,13 @@ def analyze_drift(
     """
     if engine not in ENGINES:
         raise InputError("output.engine", f"unknown engine {engine!r}", "use fast or exact")
+    # The whole analysis on one BLAS thread: its products are small or medium, where
+    # threads cost more than they save (see single_thread_blas).
+    with single_thread_blas():
+        return _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, substep)
+
+
+def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, substep):
     duration = history.duration
     t = output_grid(duration, dt_out)
     t_cov = output_grid(duration, dt_cov)

@@ -48,7 +48,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 from inserr.core.rotations import skew
 from inserr.model.attitude_history import AttitudeHistory, Pieces
@@ -538,6 +538,21 @@ class ConstantErrorResponse:
     nodes: int
 
 
+_BLAS: list = []  # the process's ThreadpoolController, found once (finding it costs ~1 ms)
+
+
+def single_thread_blas():
+    """Context in which BLAS runs on one thread.
+
+    The engine's matrix products are many and small or medium: a multi-threaded BLAS
+    costs more than it saves there (its threads spin while waiting, and fight with
+    the processes of a sweep or with other programs).
+    """
+    if not _BLAS:
+        _BLAS.append(ThreadpoolController())
+    return _BLAS[0].limit(limits=1, user_api="blas")
+
+
 def _grid_step(t: np.ndarray) -> float | None:
     """Step of a uniform grid 0, h, 2h, ... (its last point may be shorter), else None."""
     if len(t) < 2 or t[0] != 0.0:
@@ -574,9 +589,7 @@ def constant_error_response(
     -------
     ConstantErrorResponse
     """
-    # Many small and medium matrix products: a multi-threaded BLAS costs more than it
-    # saves here, and fights with the processes of a sweep.
-    with threadpool_limits(limits=1, user_api="blas"):
+    with single_thread_blas():
         return _constant_error_response(model, history, sources, t_fine, t_coarse)
 
 
@@ -1688,7 +1701,7 @@ def gauss_markov_covariance(
     ndarray, shape (M, 9, 9)
         Covariance of psi (rad), dv (m/s), dr (m), ENU, symmetrised.
     """
-    with threadpool_limits(limits=1, user_api="blas"):
+    with single_thread_blas():
         return _gauss_markov(model, history, sigma, tau, sensor, np.asarray(t, dtype=float))
 
 
