@@ -881,17 +881,21 @@ class _Run:
         feats = feats.reshape(len(idx), ROTATION_SAMPLES, N_FEATURES)
         # F_k = (1/5) sum_j F(theta_j) e^{-i k theta_j}, k = -2..2
         dft = np.exp(-1j * ks[:, None] * theta[None, :]) / ROTATION_SAMPLES  # (5 k, 5 j)
-        fk = np.einsum("kj,wjf->wkf", dft, feats)  # (W, 5, 63)
+        fk = np.matmul(dft.real, feats) + 1j * np.matmul(dft.imag, feats)  # (W, 5, 63)
         nu = ks[None, :] * rho[:, None]  # (W, 5) rad/s
         length = win.b[idx] - win.a[idx]
         # int_0^L e^{lambda (L - tau)} e^{i nu tau} dtau, per window, harmonic, mode.
         zl = (1j * nu[:, :, None] - lam[None, None, :]) * length[:, None, None]
         wt = (np.exp(lam[None, :] * length[:, None]) * length[:, None])[:, None, :] * phi1(zl)
-        uk = np.einsum("wkf,rf->wkr", fk, self.a_sig)  # signed input per harmonic
-        self.incr[idx] = np.einsum("wkr,wkr->wr", uk, wt)
+        uk = fk @ self.a_sig.T  # (W, 5, R): signed input per harmonic
+        self.incr[idx] = (uk * wt).sum(axis=1)
         j = win.coarse[idx]
         to_c = self._to_coarse(win.b[idx], j)  # (W, R)
-        y = np.einsum("wkr,wkf->wrf", wt * to_c[:, None, :], fk)
+        # y[w, r, f] = sum_k wt to_c [w, k, r] fk[w, k, f]: five broadcast products.
+        wtc = wt * to_c[:, None, :]
+        y = wtc[:, 0, :, None] * fk[:, 0, None, :]
+        for k in range(1, ROTATION_SAMPLES):
+            y += wtc[:, k, :, None] * fk[:, k, None, :]
         jj, sums = _group_sum(j, y)
         self._add_features(jj, sums)
         self.rotation_uk = np.zeros((len(win.a), ROTATION_SAMPLES, len(lam)), dtype=complex)
