@@ -44,7 +44,9 @@ continuous motion without sub-steps.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -71,6 +73,10 @@ CHUNK_NODES = 40_000
 ROTATION_SAMPLES = 5
 #: Fine output times evaluated at once (bounds memory on long runs).
 CHUNK_FINE = 200_000
+#: Runs with more fine outputs than this split them into at least two blocks, which
+#: :func:`engine_threads` threads may compute at once. The blocks depend on the output
+#: count only, never on the thread count: the numbers are the same on any machine.
+SPLIT_FINE = 50_000
 #: Largest |Re lambda| * time span of one scan block (keeps exp() within float range).
 SCAN_SPAN = 200.0
 #: Window boundaries closer than this (s) are merged.
@@ -538,6 +544,34 @@ class ConstantErrorResponse:
     nodes: int
 
 
+def engine_threads() -> int:
+    """Threads one analysis may use for its independent blocks of work (1 or 2).
+
+    ``INSERR_THREADS`` if set; else 1 in a process told to use one BLAS thread
+    (``OMP_NUM_THREADS`` or ``OPENBLAS_NUM_THREADS`` = 1: a sweep's or a design's worker
+    processes, where the parallelism is across points); else 2 if the machine has two
+    cores or more. The work is split the same way whatever the count (see
+    :data:`SPLIT_FINE`), so the results do not depend on it.
+    """
+    chosen = os.environ.get("INSERR_THREADS")
+    if chosen:
+        return max(1, int(chosen))
+    if "1" in (os.environ.get("OMP_NUM_THREADS"), os.environ.get("OPENBLAS_NUM_THREADS")):
+        return 1
+    return 2 if (os.cpu_count() or 1) >= 2 else 1
+
+
+def run_blocks(tasks: list) -> list:
+    """Results of the callables ``tasks`` (independent, writing disjoint outputs), on
+    :func:`engine_threads` threads (numpy releases the GIL in its large operations)."""
+    threads = engine_threads()
+    if threads < 2 or len(tasks) < 2:
+        return [task() for task in tasks]
+    with ThreadPoolExecutor(max_workers=min(threads, len(tasks))) as pool:
+        futures = [pool.submit(task) for task in tasks]
+        return [f.result() for f in futures]
+
+
 _BLAS: list = []  # the process's ThreadpoolController, found once (finding it costs ~1 ms)
 
 
@@ -625,28 +659,41 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     run.z_end = scan(lam, 0.0, z0, full.b, run.incr[run.src] if run.src is not None else run.incr)
     run.z_start = np.concatenate([z0[None], run.z_end[:-1]])
 
-    # Fine outputs in blocks (a 720 h run at 1 s has 2.6 million of them).
+    # Fine outputs in blocks (a 720 h run at 1 s has 2.6 million of them), and the
+    # per-source responses: independent pieces of work, on up to engine_threads().
     fine = np.empty((len(t_fine), 9))
     h = _grid_step(t_fine)
-    stop = len(t_fine)
-    if lift is not None:
-        stop = _lifted_fine(run, modes, lift, t_fine, h, fine)  # all outputs after t0
-    for lo in range(0, stop, CHUNK_FINE):
-        tb = t_fine[lo : min(lo + CHUNK_FINE, stop)]
-        at_zero = tb <= MERGE
-        inside = np.flatnonzero(~at_zero)
-        block = fine[lo : lo + len(tb)]
-        block[at_zero] = modes.to_nav(z0[None])[0]
-        if len(inside):
-            block[inside] = run.fine_nav(tb[inside], h)
 
-    # Per source: modal inputs per coarse interval, then the scan over coarse intervals.
-    z_src0 = modes.to_modes(sources.x0, axis=0)  # (R, N)
-    coarse_z = np.empty((len(t_coarse), modes.n_modes, sources.n), dtype=complex)
-    coarse_z[0] = z_src0
-    if len(t_coarse) > 1:
-        coarse_z[1:] = scan(lam, float(t_coarse[0]), z_src0, t_coarse[1:], inputs[1:])
-    coarse = modes.to_nav(coarse_z * sources.value[None, None, :], axis=1)
+    def per_source() -> np.ndarray:
+        # Modal inputs per coarse interval, then the scan over coarse intervals.
+        z_src0 = modes.to_modes(sources.x0, axis=0)  # (R, N)
+        coarse_z = np.empty((len(t_coarse), modes.n_modes, sources.n), dtype=complex)
+        coarse_z[0] = z_src0
+        if len(t_coarse) > 1:
+            coarse_z[1:] = scan(lam, float(t_coarse[0]), z_src0, t_coarse[1:], inputs[1:])
+        return modes.to_nav(coarse_z * sources.value[None, None, :], axis=1)
+
+    def fine_block(lo: int, hi: int):
+        def work() -> None:
+            tb = t_fine[lo:hi]
+            at_zero = tb <= MERGE
+            inside = np.flatnonzero(~at_zero)
+            block = fine[lo:hi]
+            block[at_zero] = modes.to_nav(z0[None])[0]
+            if len(inside):
+                block[inside] = run.fine_nav(tb[inside], h)
+
+        return work
+
+    if lift is not None:
+        # All outputs after t0 from the periods' states; the first ones below.
+        tasks = _lifted_fine(run, modes, lift, t_fine, h, fine)
+        stop = tasks.pop()
+    else:
+        stop, tasks = len(t_fine), []
+    run.prepare_fine(h)  # tables shared by the blocks, made once before they start
+    tasks += [fine_block(lo, hi) for lo, hi in _blocks(stop)]
+    coarse = run_blocks([per_source] + tasks)[0]
     counts = {
         name: int(np.count_nonzero(win.kind == k))
         for name, k in (
@@ -661,14 +708,25 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     return ConstantErrorResponse(t_fine, fine, t_coarse, coarse, counts, run.nodes)
 
 
-def _lifted_fine(run, modes: NavModes, lift, t: np.ndarray, h: float, out: np.ndarray) -> int:
+def _blocks(n: int) -> list[tuple[int, int]]:
+    """``(lo, hi)`` blocks of ``n`` fine outputs: at most :data:`CHUNK_FINE` each, and at
+    least two above :data:`SPLIT_FINE` (equal sizes; a function of ``n`` only)."""
+    if n <= 0:
+        return []
+    count = max(-(-n // CHUNK_FINE), 2 if n > SPLIT_FINE else 1)
+    edges = np.linspace(0, n, count + 1).round().astype(int)
+    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:], strict=True)]
+
+
+def _lifted_fine(run, modes: NavModes, lift, t: np.ndarray, h: float, out: np.ndarray) -> list:
     """Fine outputs of a periodic run: ``z(t0 + k P + s) = e^{lambda s} Z_k + p(s)``.
 
     ``Z_k`` is the state at the start of period k (from the window scan) and ``p`` the
     response of one period from a zero state (the same for every period, by
     periodicity), so the outputs of all periods are one small real matrix product per
-    navigation state. Fills ``out[j0:]`` (from ``t0`` on) and returns ``j0``; the
-    outputs before ``t0`` are left to the caller.
+    navigation state. Returns the tasks that fill ``out[j0:]`` (from ``t0`` on; blocks
+    of periods, :func:`_blocks`) followed by ``j0``; the outputs before ``t0`` are left
+    to the caller.
     """
     t0, period = lift
     j0 = int(round(t0 / h))
@@ -691,12 +749,23 @@ def _lifted_fine(run, modes: NavModes, lift, t: np.ndarray, h: float, out: np.nd
     b = np.concatenate(
         [(e[:, None, :] * vw[None]).real, (e[:, None, :] * vw[None]).imag], axis=2
     )  # (n_s, 9, 2R)
-    hom = (a @ b.reshape(-1, 2 * len(lam)).T).reshape(n_per, n_s, 9)
+    bt = b.reshape(-1, 2 * len(lam)).T  # (2R, n_s 9)
     part = (p @ vw.T).real  # (n_s, 9)
-    vals = (hom + part[None]).reshape(-1, 9)
     n = len(t) - 1 - j0
-    out[j0 + 1 :] = vals[:n]
-    return j0 + 1
+    # Periods in blocks of about the fine blocks' size (each writes its own rows).
+    per_block = max(1, -(-(_blocks(n_per * n_s)[0][1]) // n_s))
+
+    def periods(k0: int, k1: int):
+        def work() -> None:
+            vals = ((a[k0:k1] @ bt).reshape(k1 - k0, n_s, 9) + part[None]).reshape(-1, 9)
+            lo = j0 + 1 + k0 * n_s
+            hi = min(j0 + 1 + k1 * n_s, j0 + 1 + n)
+            out[lo:hi] = vals[: hi - lo]
+
+        return work
+
+    tasks = [periods(k, min(k + per_block, n_per)) for k in range(0, n_per, per_block)]
+    return tasks + [j0 + 1]
 
 
 def _lifting(history, t_fine: np.ndarray, t_coarse: np.ndarray) -> tuple[float, float] | None:
@@ -1148,6 +1217,11 @@ class _Run:
             lo = hi
 
     # --- fine output times --------------------------------------------------------------
+    def prepare_fine(self, dt_fine: float | None) -> None:
+        """Make the tables the fine-output blocks share (before they run at once)."""
+        if hasattr(self, "cached_template") and fine_aligned(self.step, dt_fine):
+            self._cached_nav_table(dt_fine)
+
     def fine_nav(self, t: np.ndarray, dt_fine: float | None) -> np.ndarray:
         """Signed navigation errors at times ``t`` (s, > 0, increasing), (len(t), 9).
 
