@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from inserr.core.errors import InputError
-from inserr.core.rotations import rot_x, rot_z
+from inserr.core.rotations import rot_x, rot_z_times
 from inserr.model.attitude_history import Pieces
 from inserr.model.timeline import Timeline
 from inserr.schemes.turntable import TableSchedule, gimbal_axis_b, table_dcm
@@ -264,7 +264,7 @@ class ScheduleHistory:
     def evaluate_vehicle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``C_b^n`` (N, 3, 3) and ``w_nb^n`` (N, 3, rad/s, ENU) of the vehicle at times ``t``."""
         t = np.asarray(t, dtype=float)
-        return _rot_z_times(-self.motion.heading_at(t), self.motion.tilt), self.motion.rate_n(t)
+        return rot_z_times(-self.motion.heading_at(t), self.motion.tilt), self.motion.rate_n(t)
 
     def evaluate(self, t: np.ndarray, piece: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``C_s^n`` (N, 3, 3) and ``w_ns^n`` (N, 3, rad/s, ENU) at times ``t`` of ``piece``."""
@@ -272,7 +272,7 @@ class ScheduleHistory:
         k = self._segment[np.asarray(piece)]
         tab = self.table
         # Heading-only vehicle motion: C_b^n = rot_z(-H) C_tilt (two sines per time).
-        c_bn = _rot_z_times(-self.motion.heading_at(t), self.motion.tilt)
+        c_bn = rot_z_times(-self.motion.heading_at(t), self.motion.tilt)
         w_nb = self.motion.rate_n(t)
         a, b = tab.angles_at(t, self.motion)
         plain = tab.mounting is None and not np.any(b)  # C_s^b = rot_z(a)
@@ -302,7 +302,9 @@ class ScheduleHistory:
             a, b = tab.angles_at(t, self.motion)
         m = np.eye(3) if tab.mounting is None else tab.mounting
         u = rot_x(b) @ (m @ np.array([0.0, 1.0, 0.0]))  # IMU y axis before the outer gimbal
-        ru = np.einsum("nij,nj->ni", rot_z(a), u)
+        ca, sa = np.cos(a), np.sin(a)
+        ru = np.stack([ca * u[..., 0] - sa * u[..., 1], sa * u[..., 0] + ca * u[..., 1],
+                       np.broadcast_to(u[..., 2], ca.shape)], axis=-1)  # rot_z(a) u  # fmt: skip
         v = np.einsum("nij,nj->ni", c_bn, ru)  # IMU y axis in n
         dv_dt = np.cross(w_nb, v)
         dv_da = np.einsum("nij,nj->ni", c_bn, np.cross(np.array([0.0, 0.0, 1.0]), ru))
@@ -313,17 +315,6 @@ class ScheduleHistory:
             return (v[:, 1] * dv[:, 0] - v[:, 0] * dv[:, 1]) / den
 
         return (tab.target_rate[k] - dpsi(dv_dt)) / dpsi(dv_da)
-
-
-def _rot_z_times(angle: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """``rot_z(angle) @ m`` for many angles and one (3, 3) ``m``, row by row (no matrix
-    product per angle): rows ``c m0 - s m1``, ``s m0 + c m1``, ``m2``."""
-    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
-    out = np.empty((len(c), 3, 3))
-    out[:, 0] = c * m[0] - s * m[1]
-    out[:, 1] = s * m[0] + c * m[1]
-    out[:, 2] = m[2]
-    return out
 
 
 def _times_rot_z(m: np.ndarray, angle: np.ndarray) -> np.ndarray:
