@@ -1534,15 +1534,31 @@ class _Run:
             key, axis=0, return_inverse=True, return_counts=True
         )
         shape_of = shape_of.reshape(-1)
-        for sh in np.flatnonzero(shape_count > 1):
-            members = np.flatnonzero(shape_of == sh)
-            m = int(win.n[wins[members[0]]])
+        shared = np.flatnonzero(shape_count > 1)
+        groups = [np.flatnonzero(shape_of == sh) for sh in shared]
+        # The shared integration matrices (cnt, m) of all shapes with the same point
+        # count m in one call (a run has tens of shapes, each with a few outputs).
+        jmats: list = [None] * len(groups)
+        n_of = np.array([int(win.n[wins[g[0]]]) for g in groups], dtype=int)
+        for m in np.unique(n_of):
+            which = np.flatnonzero(n_of == m)
+            xs, halves, sizes = [], [], []
+            for i in which:
+                g0 = groups[i][0]
+                half = 0.5 * length[g0]
+                cnt = int(counts[g0])
+                xs.append(dt[first_pt[g0] : first_pt[g0] + cnt] / half - 1.0)
+                halves.append(np.full(cnt, half))
+                sizes.append(cnt)
+            mat = integration_matrix(np.concatenate(xs), int(m)) * np.concatenate(halves)[:, None]
+            for i, part in zip(which, np.split(mat, np.cumsum(sizes)[:-1]), strict=True):
+                jmats[i] = part
+        for members, jmat in zip(groups, jmats, strict=True):
+            m = jmat.shape[1]
             g = self._direct_g(wins[members], m)  # (Wg, m, R)
-            half = 0.5 * length[members[0]]
-            cnt = int(counts[members[0]])
+            cnt = jmat.shape[0]
             # Points of one window are consecutive (sorted times): first_pt .. + count.
             pts = first_pt[members][:, None] + np.arange(cnt)[None, :]  # (Wg, cnt)
-            jmat = integration_matrix(dt[pts[0]] / half - 1.0, m) * half  # (cnt, m), shared
             vals = np.tensordot(jmat, g, axes=([1], [1]))  # (cnt, Wg, R)
             out[pts.T.ravel()] = vals.reshape(cnt * len(members), len(lam))
         # Windows of a shape of their own (irregular stop times): point by point.
