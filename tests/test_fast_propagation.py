@@ -561,3 +561,22 @@ def test_results_do_not_depend_on_the_thread_count(monkeypatch, scheme):
     assert one.noise_cov.keys() == two.noise_cov.keys()
     for k in one.noise_cov:
         assert np.array_equal(one.noise_cov[k], two.noise_cov[k]), k
+
+
+def test_white_noise_covariance_kept_for_reuse_is_a_fresh_copy_each_time():
+    """A sweep's points share the white-noise covariance (same site, noise, grid): the
+    kept one must equal a new computation, and a caller changing its copy must not
+    change what the next caller gets."""
+    model = ErrorModel(SITE, Layout(bias=False))
+    t = output_grid(6 * 3600.0, 60.0)
+    first = fp.white_noise_covariance(model, 1e-6, 2e-5, t)
+    first[:] = np.nan  # a caller scribbling on its result
+    second = fp.white_noise_covariance(model, 1e-6, 2e-5, t)
+    fp._WHITE_CACHE.clear()
+    fresh = fp.white_noise_covariance(model, 1e-6, 2e-5, t)
+    assert np.array_equal(second, fresh) and np.all(np.isfinite(second))
+    # Another density is another covariance (the key includes it): P is linear in the
+    # PSD, so doubling it doubles P (to round-off of the largest entry: 1e-12 of it).
+    double = fp.white_noise_covariance(model, np.sqrt(2) * 1e-6, 0.0, t)
+    alone = fp.white_noise_covariance(model, 1e-6, 0.0, t)
+    np.testing.assert_allclose(double, 2 * alone, rtol=0, atol=1e-12 * np.abs(alone).max())

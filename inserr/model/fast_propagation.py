@@ -1714,8 +1714,13 @@ def white_noise_covariance(
     ndarray, shape (M, 9, 9)
         Covariance of psi (rad), dv (m/s), dr (m), ENU, symmetrised.
     """
-    modes = NavModes(model)
     t = np.asarray(t, dtype=float)
+    # The same site, noise and grid give the same covariance: the points of a sweep or
+    # a design (one worker runs many) compute it once. A copy goes out (callers own it).
+    key = (model, float(arw), float(vrw), t.tobytes())
+    if key in _WHITE_CACHE:
+        return _WHITE_CACHE[key].copy()
+    modes = NavModes(model)
     inv, out = modes.inv_all, modes.out_all
     g = np.zeros((9, 6))
     g[0:3, 0:3] = -np.eye(3)
@@ -1725,9 +1730,14 @@ def white_noise_covariance(
     q = np.diag([arw**2] * 3 + [vrw**2] * 3)
     m = inv @ g @ q @ g.T @ inv.conj().T
     p = (out @ (m[None] * _xi(modes, t)) @ out.conj().T).real
-    return 0.5 * (p + np.swapaxes(p, 1, 2))
+    p = 0.5 * (p + np.swapaxes(p, 1, 2))
+    if len(_WHITE_CACHE) >= 4:
+        _WHITE_CACHE.pop(next(iter(_WHITE_CACHE)))
+    _WHITE_CACHE[key] = p
+    return p.copy()
 
 
+_WHITE_CACHE: dict = {}
 _XI_CACHE: dict = {}
 
 
