@@ -16,8 +16,9 @@ included) with the outputs the report uses: deterministic response at 1 s, per-s
 responses, RMS and worst case over unknown signs and noise covariance at 60 s.
 
 Printed, in order: every catalogue scheme on the static and on P0's swinging base
-(72 h), the cost at 6, 72 and 720 h, the peak memory of a 72 h and a 720 h swinging-base
-``inserr drift`` (separate processes), and last::
+(72 h; on the engine's threads and on one, ``INSERR_THREADS=1``), the cost at 6, 72 and
+720 h, the peak memory of a 72 h and a 720 h swinging-base ``inserr drift`` (separate
+processes), and last::
 
     speedup_vs_naive_100hz: <static base, two-position>
     moving_base_speedup_vs_naive_100hz: <P0 swing, flexible rule>
@@ -137,22 +138,44 @@ def peak_memory_mb(hours: float, scheme: str) -> float:
     return resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
 
 
+class _one_thread:
+    """The engine on one thread inside the block (``INSERR_THREADS=1``)."""
+
+    def __enter__(self):
+        self.before = os.environ.get("INSERR_THREADS")
+        os.environ["INSERR_THREADS"] = "1"
+
+    def __exit__(self, *exc):
+        if self.before is None:
+            os.environ.pop("INSERR_THREADS", None)
+        else:
+            os.environ["INSERR_THREADS"] = self.before
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="skip the 720 h run and its memory")
     args = ap.parse_args(argv)
     from inserr.drift.study import run_scheme
+    from inserr.model.fast_propagation import engine_threads
     from inserr.schemes.catalogue import SCHEMES
 
     static, swing = _scenario(True), _scenario(False)
-    print("72 h per scheme, P0 budget, outputs 1 s / 60 s (best of 3 warm runs):")
-    print(f"{'scheme':>26} {'static s':>9} {'swing s':>9}")
+    threads = engine_threads()
+    print(
+        f"72 h per scheme, P0 budget, outputs 1 s / 60 s (best of 3 warm runs), on "
+        f"{threads} engine thread(s) and on one (INSERR_THREADS=1):"
+    )
+    print(f"{'scheme':>26} {'static s':>9} {'swing s':>9} {'1 thread':>9} {'1 thread':>9}")
     for name in SCHEMES:
         if name == "custom":
             continue
         ts = best_of(lambda n=name: run_scheme(static, n))
         tw = best_of(lambda n=name: run_scheme(swing, n))
-        print(f"{name:>26} {ts:>9.3f} {tw:>9.3f}")
+        with _one_thread():
+            ts1 = best_of(lambda n=name: run_scheme(static, n))
+            tw1 = best_of(lambda n=name: run_scheme(swing, n))
+        print(f"{name:>26} {ts:>9.3f} {tw:>9.3f} {ts1:>9.3f} {tw1:>9.3f}")
 
     print("cost against the horizon (P0 swing, two-position):")
     hours = (6.0, 72.0) if args.quick else (6.0, 72.0, 720.0)

@@ -19,6 +19,7 @@ Three kinds of truth:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -27,7 +28,7 @@ import scipy.linalg as sl
 
 from inserr.core.earth import Site
 from inserr.core.imu import ImuErrors, InitialErrors
-from inserr.core.units import ARCSEC, DEG, DEG_PER_HOUR, MICRO_G, PPM
+from inserr.core.units import ARCSEC, DEG, DEG_PER_HOUR, DEG_PER_SQRT_HOUR, MICRO_G, PPM
 from inserr.drift.analysis import analyze_drift, output_grid
 from inserr.model import fast_propagation as fp
 from inserr.model import quadrature as q
@@ -513,3 +514,69 @@ def test_static_schedule_equals_the_step_engine_on_its_timeline(scheme):
         _relative(fast.source_horizontal.reshape(n, -1), exact.source_horizontal.reshape(n, -1))
         < 3e-7
     )
+
+
+def test_fine_blocks_cover_the_outputs_and_depend_on_their_count_only():
+    for n in (0, 1, 7, fp.SPLIT_FINE, fp.SPLIT_FINE + 1, 259_201, 2_592_001):
+        blocks = fp._blocks(n)
+        edges = [lo for lo, _ in blocks] + [blocks[-1][1]] if blocks else [0]
+        assert edges[0] == 0 and edges[-1] == n
+        assert all(hi > lo for lo, hi in blocks)
+        assert all(b[1] == c[0] for b, c in zip(blocks[:-1], blocks[1:], strict=True))
+        assert all(hi - lo <= fp.CHUNK_FINE for lo, hi in blocks)
+        assert len(blocks) >= (2 if n > fp.SPLIT_FINE else min(n, 1))
+
+
+def test_engine_threads_follow_the_environment(monkeypatch):
+    for var in ("INSERR_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        monkeypatch.delenv(var, raising=False)
+    monkeypatch.setenv("INSERR_THREADS", "1")
+    assert fp.engine_threads() == 1
+    monkeypatch.delenv("INSERR_THREADS")
+    monkeypatch.setenv("OMP_NUM_THREADS", "1")  # a sweep worker: parallel across points
+    assert fp.engine_threads() == 1
+    monkeypatch.setenv("INSERR_THREADS", "2")  # an explicit choice wins
+    assert fp.engine_threads() == 2
+
+
+@pytest.mark.parametrize("scheme", ["nulling-two-position", "two-position"])
+def test_results_do_not_depend_on_the_thread_count(monkeypatch, scheme):
+    """The fine outputs go in blocks that depend on their count only, computed on one
+    thread or two, and the noise alongside the constant errors: bit-for-bit the same
+    numbers either way (a closed-loop schedule on the swing, and a periodic one, whose
+    periods are lifted). 15 h at 1 s: more outputs than one block takes."""
+    duration = 15 * 3600.0
+    history = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, duration), SWING,
+                              duration)  # fmt: skip
+    # With white noise too (computed alongside the constant errors).
+    imu = dataclasses.replace(IMU, arw=0.002 * DEG_PER_SQRT_HOUR, vrw=5e-5)
+    runs = {}
+    for threads in ("1", "2"):
+        monkeypatch.setenv("INSERR_THREADS", threads)
+        runs[threads] = analyze_drift(SITE, imu, INIT, history, dt_out=1.0, dt_cov=60.0)
+    one, two = runs["1"], runs["2"]
+    assert len(one.t) > fp.SPLIT_FINE and set(one.noise_cov) == {"arw", "vrw"}
+    for name in ("nav", "attitude", "source_horizontal", "source_heading"):
+        assert np.array_equal(getattr(one, name), getattr(two, name)), name
+    assert one.noise_cov.keys() == two.noise_cov.keys()
+    for k in one.noise_cov:
+        assert np.array_equal(one.noise_cov[k], two.noise_cov[k]), k
+
+
+def test_white_noise_covariance_kept_for_reuse_is_a_fresh_copy_each_time():
+    """A sweep's points share the white-noise covariance (same site, noise, grid): the
+    kept one must equal a new computation, and a caller changing its copy must not
+    change what the next caller gets."""
+    model = ErrorModel(SITE, Layout(bias=False))
+    t = output_grid(6 * 3600.0, 60.0)
+    first = fp.white_noise_covariance(model, 1e-6, 2e-5, t)
+    first[:] = np.nan  # a caller scribbling on its result
+    second = fp.white_noise_covariance(model, 1e-6, 2e-5, t)
+    fp._WHITE_CACHE.clear()
+    fresh = fp.white_noise_covariance(model, 1e-6, 2e-5, t)
+    assert np.array_equal(second, fresh) and np.all(np.isfinite(second))
+    # Another density is another covariance (the key includes it): P is linear in the
+    # PSD, so doubling it doubles P (to round-off of the largest entry: 1e-12 of it).
+    double = fp.white_noise_covariance(model, np.sqrt(2) * 1e-6, 0.0, t)
+    alone = fp.white_noise_covariance(model, 1e-6, 0.0, t)
+    np.testing.assert_allclose(double, 2 * alone, rtol=0, atol=1e-12 * np.abs(alone).max())

@@ -650,6 +650,16 @@ def test_non_finite_results_are_an_error():
         check_finite(Res(), "none")
     Res.noise_cov = {}
     check_finite(Res(), "none")
+    # One bad entry anywhere, of either sign or kind, in any of the arrays.
+    for bad in (np.nan, np.inf, -np.inf):
+        for name in ("nav", "attitude"):
+            arr = np.zeros((5, 9 if name == "nav" else 3))
+            arr[3, 1] = bad
+            setattr(Res, name, arr)
+            with pytest.raises(InputError, match="non-finite"):
+                check_finite(Res(), "none")
+            setattr(Res, name, np.zeros_like(arr))
+    check_finite(Res(), "none")
 
 
 # --- generated inputs (hypothesis) --------------------------------------------------------

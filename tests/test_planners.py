@@ -380,3 +380,40 @@ def test_nulling_swing_test_at_every_stop():
         else:
             assert used == expected
     assert any(seen) and not all(seen)  # both outcomes occur
+
+
+@pytest.mark.parametrize("case", sorted(SWINGS))
+def test_fallback_best_sample_in_closed_form_equals_every_sample(case):
+    """The fallback's best sample, found from the closed form plus the samples that can
+    decide it, is the one the sampled rule picks from every sample of the turn.
+
+    Random turn starts (time, table angle, direction, expression, sign condition) on
+    the stress motions; the reference is the same search with its round-off bound
+    removed, which computes every sample with the rule's own operations. Offsets ``c``
+    near +-1 make the score flat at its minimum (ties) and the sign condition hover.
+    """
+    from inserr.schemes.closed_loop import _TurnSearch
+
+    motion, mounting = SWINGS[case]
+    scheme = build_scheme("flexible-two-position", RATE, TS, mounting=mounting)
+    fast = _TurnSearch(scheme, motion, 6 * 3600.0)
+    assert fast.roundoff is not None
+    slow = _TurnSearch(scheme, motion, 6 * 3600.0)
+    slow.roundoff = None
+    rng = np.random.default_rng(7)
+    looked = []
+    for _ in range(150):
+        args = (
+            float(rng.uniform(0, 6 * 3600.0)),
+            float(rng.uniform(-4 * np.pi, 4 * np.pi)),
+            float(rng.choice([1.0, -1.0])),
+            int(rng.integers(2)),
+            float(rng.choice([rng.uniform(-1.2, 1.2), 1.0, -1.0, 0.0])),
+            float(rng.choice([1.0, -1.0, 0.0])),
+        )
+        assert fast.best_sample(*args) == slow.best_sample(*args), args
+        tol = fast.roundoff + 1e-12 * abs(args[1])
+        found = fast._stretches(args[0], np.exp(1j * args[1]), *args[2:], tol)
+        looked.append(fast.n_short if found is None else len(found[0]))
+    # The bounds did their job: most turns were looked at in a few stretches only.
+    assert np.median(looked) < fast.n_short / 4

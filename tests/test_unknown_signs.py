@@ -67,6 +67,9 @@ def test_worst_case_norm_is_the_brute_force_maximum_for_batches(n):
             assert norm[i, j] == pytest.approx(best, rel=1e-12)
             assert np.all(np.abs(signs[i, j]) == 1.0)
             assert math.hypot(*(signs[i, j] @ v[i, j])) == pytest.approx(best, rel=1e-12)
+    # The norm-only walk (what the drift metrics use) gives the same norms, bit for bit.
+    alone, none = worst_case_norm(v, signs=False)
+    assert none is None and np.array_equal(alone, norm)
 
 
 def test_worst_case_bounds_every_random_sign_pattern_and_the_rms():

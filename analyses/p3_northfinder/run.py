@@ -34,7 +34,7 @@ ANALYSIS = {
     "monte_carlo": {
         "quick_runs": Key("int", None, 30, "runs of every Monte Carlo in --quick"),
         "check_runs": Key("int", None, 1000, "runs of the check at the required grade"),
-        "quick_check_runs": Key("int", None, 100, "the same in --quick"),
+        "quick_check_runs": Key("int", None, 30, "the same in --quick"),
     },
     "requirement": {
         "heading_1sigma": Key("angle", None, "0.5 mil", "required heading 1 sigma"),

@@ -67,6 +67,35 @@ def rot_axis(axis: np.ndarray, angle) -> np.ndarray:
     return np.eye(3) + s * k + (1.0 - c) * (k @ k)
 
 
+def _axis_turn(angle, i: int, j: int) -> np.ndarray:
+    """``expm(angle [e_k x])`` for the axis k with (i, j, k) cyclic: ``C[i, i] = C[j, j] =
+    cos``, ``C[j, i] = sin = -C[i, j]``, ``C[k, k] = 1`` (:func:`rot_axis` for a
+    coordinate axis, built from one sine and cosine per angle)."""
+    angle = np.asarray(angle, dtype=float)
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros(angle.shape + (3, 3))
+    k = 3 - i - j
+    out[..., k, k] = 1.0
+    out[..., i, i] = c
+    out[..., j, j] = c
+    out[..., j, i] = s
+    out[..., i, j] = -s
+    return out
+
+
+def rot_z_times(angle, m: np.ndarray) -> np.ndarray:
+    """``rot_z(angle) @ m`` for (N,) angles and one (3, 3) ``m``, row by row (no matrix
+    product per angle): rows ``c m0 - s m1``, ``s m0 + c m1``, ``m2``. Shape (N, 3, 3)."""
+    angle = np.asarray(angle, dtype=float)
+    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
+    m = np.asarray(m, dtype=float)
+    out = np.empty((len(angle), 3, 3))
+    out[:, 0] = c * m[0] - s * m[1]
+    out[:, 1] = s * m[0] + c * m[1]
+    out[:, 2] = m[2]
+    return out
+
+
 def rot_x(angle) -> np.ndarray:
     """DCM of a right-hand turn by ``angle`` about the x axis; see module conventions.
 
@@ -80,7 +109,7 @@ def rot_x(angle) -> np.ndarray:
     ndarray, shape (3, 3) or (..., 3, 3)
         ``expm(angle [e_x x])``: maps turned-frame components to original-frame ones.
     """
-    return rot_axis(np.array([1.0, 0.0, 0.0]), angle)
+    return _axis_turn(angle, 1, 2)
 
 
 def rot_y(angle) -> np.ndarray:
@@ -96,7 +125,7 @@ def rot_y(angle) -> np.ndarray:
     ndarray, shape (3, 3) or (..., 3, 3)
         ``expm(angle [e_y x])``: maps turned-frame components to original-frame ones.
     """
-    return rot_axis(np.array([0.0, 1.0, 0.0]), angle)
+    return _axis_turn(angle, 2, 0)
 
 
 def rot_z(angle) -> np.ndarray:
@@ -112,7 +141,7 @@ def rot_z(angle) -> np.ndarray:
     ndarray, shape (3, 3) or (..., 3, 3)
         ``expm(angle [e_z x])``: maps turned-frame components to original-frame ones.
     """
-    return rot_axis(np.array([0.0, 0.0, 1.0]), angle)
+    return _axis_turn(angle, 0, 1)
 
 
 def body_to_nav(heading, pitch, roll) -> np.ndarray:

@@ -39,6 +39,8 @@ from inserr.model.exact_propagation import Output, propagate_covariance, propaga
 from inserr.model.fast_propagation import (
     constant_error_response,
     gauss_markov_covariance,
+    run_blocks,
+    single_thread_blas,
     white_noise_covariance,
 )
 from inserr.model.psi_model import DR, ErrorModel, Layout, attitude_error
@@ -109,7 +111,7 @@ class DriftResult:
     @cached_property
     def worst_horizontal(self) -> np.ndarray:
         """Horizontal error of the worst sign combination at each coarse time, m."""
-        return worst_case_norm(self.source_horizontal)[0]
+        return worst_case_norm(self.source_horizontal, signs=False)[0]
 
 
 def output_grid(duration: float, step: float) -> np.ndarray:
@@ -198,6 +200,13 @@ def analyze_drift(
     """
     if engine not in ENGINES:
         raise InputError("output.engine", f"unknown engine {engine!r}", "use fast or exact")
+    # The whole analysis on one BLAS thread: its products are small or medium, where
+    # threads cost more than they save (see single_thread_blas).
+    with single_thread_blas():
+        return _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, substep)
+
+
+def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, substep):
     duration = history.duration
     t = output_grid(duration, dt_out)
     t_cov = output_grid(duration, dt_cov)
@@ -209,11 +218,11 @@ def analyze_drift(
             return history
         return history.timeline(substep)
 
-    if engine == "fast":
-        hist = TimelineHistory(history) if isinstance(history, Timeline) else history
-        resp = constant_error_response(model, hist, source_set(model, sources), t, t_cov)
-        nav, coarse = resp.fine, resp.coarse
-    else:
+    def constants() -> tuple[np.ndarray, np.ndarray]:
+        if engine == "fast":
+            hist = TimelineHistory(history) if isinstance(history, Timeline) else history
+            resp = constant_error_response(model, hist, source_set(model, sources), t, t_cov)
+            return resp.fine, resp.coarse
         tl = timeline()
         disc = discretizer_for(model)
         cols = source_matrix(model, sources, tl.c_sn[0])
@@ -226,7 +235,49 @@ def analyze_drift(
             np.column_stack([x0, cols * values]),
             [Output(t, slice(0, 9), slice(0, 1)), Output(t_cov, slice(0, 9), slice(1, None))],
         )
-        nav = fine[..., 0]
+        return fine[..., 0], coarse
+
+    def noise() -> dict[str, np.ndarray]:
+        noise_cov: dict[str, np.ndarray] = {}
+        for name, (arw, vrw, gbi, abi) in _noise_runs(imu).items():
+            nmodel = ErrorModel(
+                site,
+                Layout(bias=False, bias_instability=(gbi > 0 or abi > 0)),
+                vertical=vertical,
+                gyro_correlation_time=imu.gyro_correlation_time,
+                accel_correlation_time=imu.accel_correlation_time,
+            )
+            if engine == "fast" and not nmodel.layout.bias_instability:
+                # White noise is isotropic: its covariance does not depend on the attitude.
+                noise_cov[name] = white_noise_covariance(nmodel, arw, vrw, t_cov)
+                continue
+            if engine == "fast":
+                # A Gauss-Markov bias is seen through the attitude history.
+                hist = TimelineHistory(history) if isinstance(history, Timeline) else history
+                sensor, sigma, tau = (
+                    ("gyro", gbi, imu.gyro_correlation_time)
+                    if gbi > 0
+                    else ("accel", abi, imu.accel_correlation_time)
+                )
+                nav_model = ErrorModel(site, Layout(bias=False), vertical=vertical)
+                noise_cov[name] = gauss_markov_covariance(
+                    nav_model, hist, sigma, tau, sensor, t_cov
+                )
+                continue
+            ndisc = discretizer_for(nmodel, nmodel.noise_intensity(arw, vrw, gbi, abi))
+            p0 = np.zeros((nmodel.layout.n,) * 2)
+            if nmodel.layout.bias_instability:
+                p0[nmodel.layout["bg"], nmodel.layout["bg"]] = gbi**2 * np.eye(3)
+                p0[nmodel.layout["ba"], nmodel.layout["ba"]] = abi**2 * np.eye(3)
+            noise_cov[name] = propagate_covariance(ndisc, timeline(), p0, t_cov)[:, :9, :9]
+
+        return noise_cov
+
+    if engine == "fast":
+        # Independent of each other: on up to two threads (run_blocks).
+        (nav, coarse), noise_cov = run_blocks([constants, noise])
+    else:
+        (nav, coarse), noise_cov = constants(), noise()
     att = attitude_error(site, nav)
     if sources:
         src_h = np.moveaxis(coarse[:, DR, :][:, :2, :], 1, 2)  # (Mc, N, 2)
@@ -234,37 +285,6 @@ def analyze_drift(
     else:
         src_h = np.zeros((len(t_cov), 0, 2))
         src_head = np.zeros((len(t_cov), 0))
-
-    noise_cov: dict[str, np.ndarray] = {}
-    for name, (arw, vrw, gbi, abi) in _noise_runs(imu).items():
-        nmodel = ErrorModel(
-            site,
-            Layout(bias=False, bias_instability=(gbi > 0 or abi > 0)),
-            vertical=vertical,
-            gyro_correlation_time=imu.gyro_correlation_time,
-            accel_correlation_time=imu.accel_correlation_time,
-        )
-        if engine == "fast" and not nmodel.layout.bias_instability:
-            # White noise is isotropic: its covariance does not depend on the attitude.
-            noise_cov[name] = white_noise_covariance(nmodel, arw, vrw, t_cov)
-            continue
-        if engine == "fast":
-            # A Gauss-Markov bias is seen through the attitude history.
-            hist = TimelineHistory(history) if isinstance(history, Timeline) else history
-            sensor, sigma, tau = (
-                ("gyro", gbi, imu.gyro_correlation_time)
-                if gbi > 0
-                else ("accel", abi, imu.accel_correlation_time)
-            )
-            nav_model = ErrorModel(site, Layout(bias=False), vertical=vertical)
-            noise_cov[name] = gauss_markov_covariance(nav_model, hist, sigma, tau, sensor, t_cov)
-            continue
-        ndisc = discretizer_for(nmodel, nmodel.noise_intensity(arw, vrw, gbi, abi))
-        p0 = np.zeros((nmodel.layout.n,) * 2)
-        if nmodel.layout.bias_instability:
-            p0[nmodel.layout["bg"], nmodel.layout["bg"]] = gbi**2 * np.eye(3)
-            p0[nmodel.layout["ba"], nmodel.layout["ba"]] = abi**2 * np.eye(3)
-        noise_cov[name] = propagate_covariance(ndisc, timeline(), p0, t_cov)[:, :9, :9]
 
     res = DriftResult(t, nav, att, t_cov, sources, src_h, src_head, noise_cov)
     res.metrics = headline(res)

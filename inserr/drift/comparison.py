@@ -105,7 +105,7 @@ def budget_figures(run, keep: Callable[[str], bool] | str = "full") -> dict:
     return {
         "all_positive_nmi": float(det.max() / NMI),
         "rms_nmi": float(rms_norm(v).max() / NMI),
-        "worst_nmi": float(worst_case_norm(v)[0].max() / NMI),
+        "worst_nmi": float(worst_case_norm(v, signs=False)[0].max() / NMI),
         "final_all_positive_nmi": float(det[-1] / NMI),
         "budget_nmi": dict(sorted(budget.items(), key=lambda kv: -kv[1])),
     }

@@ -32,19 +32,23 @@ def rms_norm(vectors: np.ndarray) -> np.ndarray:
     return np.sqrt(np.sum(np.asarray(vectors) ** 2, axis=(-2, -1)))
 
 
-def worst_case_norm(vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def worst_case_norm(
+    vectors: np.ndarray, signs: bool = True
+) -> tuple[np.ndarray, np.ndarray | None]:
     """Maximum of ``|sum_i s_i v_i|`` over signs ``s_i = +-1``, and the maximising signs.
 
     Parameters
     ----------
     vectors : (..., N, 2)
         Per-source 2-vectors (scaled by the source magnitudes).
+    signs : bool
+        Whether to return the maximising signs (False: the norm only, None for them).
 
     Returns
     -------
     norm : (...)
         The maximum norm.
-    signs : (..., N)
+    signs : (..., N) or None
         A maximising sign pattern (+1/-1).
 
     Notes
@@ -57,19 +61,22 @@ def worst_case_norm(vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     v = np.asarray(vectors, dtype=float)
     n = v.shape[-2]
+    want = signs
     if n == 0:
-        return np.zeros(v.shape[:-2]), np.zeros(v.shape[:-1])
+        return np.zeros(v.shape[:-2]), (np.zeros(v.shape[:-1]) if want else None)
     lead = v.shape[:-2]
     flat = v.reshape(-1, n, 2)
     norm = np.empty(len(flat))
-    signs = np.empty((len(flat), n))
+    out = np.empty((len(flat), n)) if want else None
     # In blocks of times: the walk holds 2N vertices per time.
     for lo in range(0, len(flat), 4096):
-        norm[lo : lo + 4096], signs[lo : lo + 4096] = _walk(flat[lo : lo + 4096])
-    return norm.reshape(lead), signs.reshape(lead + (n,))
+        norm[lo : lo + 4096], s = _walk(flat[lo : lo + 4096], want)
+        if want:
+            out[lo : lo + 4096] = s
+    return norm.reshape(lead), (out.reshape(lead + (n,)) if want else None)
 
 
-def _walk(vv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _walk(vv: np.ndarray, signs: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
     """:func:`worst_case_norm` of (T, N, 2) vectors (N >= 1).
 
     Directions u and -u give opposite vertices of equal norm, so half a turn of u,
@@ -89,6 +96,8 @@ def _walk(vv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     norms = np.hypot(verts[..., 0], verts[..., 1])  # (T, N + 1)
     best = np.argmax(norms, axis=-1)  # the best vertex has crossed ``best`` sources
     norm = norms[np.arange(t_n), best]
+    if not signs:
+        return norm, None
     rank = np.empty_like(order)
     np.put_along_axis(rank, order, np.arange(n)[None, :].repeat(t_n, 0), axis=-1)
     signs = np.where(rank < best[:, None], -s0, s0)

@@ -44,11 +44,13 @@ continuous motion without sub-steps.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 from inserr.core.rotations import skew
 from inserr.model.attitude_history import AttitudeHistory, Pieces
@@ -71,6 +73,10 @@ CHUNK_NODES = 40_000
 ROTATION_SAMPLES = 5
 #: Fine output times evaluated at once (bounds memory on long runs).
 CHUNK_FINE = 200_000
+#: Runs with more fine outputs than this split them into at least two blocks, which
+#: :func:`engine_threads` threads may compute at once. The blocks depend on the output
+#: count only, never on the thread count: the numbers are the same on any machine.
+SPLIT_FINE = 50_000
 #: Largest |Re lambda| * time span of one scan block (keeps exp() within float range).
 SCAN_SPAN = 200.0
 #: Window boundaries closer than this (s) are merged.
@@ -371,8 +377,9 @@ def _features(c: np.ndarray, w_is: np.ndarray, f_s: np.ndarray) -> np.ndarray:
     nn = len(c)
     out = np.empty((nn, N_FEATURES))
     out[:, :9] = c.reshape(nn, 9)
-    out[:, 9:36] = (c[:, :, :, None] * w_is[:, None, None, :]).reshape(nn, 27)
-    out[:, 36:] = (c[:, :, :, None] * f_s[:, None, None, :]).reshape(nn, 27)
+    # Products written in place (views of the rows' 27-entry blocks): no temporaries.
+    np.multiply(c[:, :, :, None], w_is[:, None, None, :], out=out[:, 9:36].reshape(nn, 3, 3, 3))
+    np.multiply(c[:, :, :, None], f_s[:, None, None, :], out=out[:, 36:].reshape(nn, 3, 3, 3))
     return out
 
 
@@ -537,6 +544,49 @@ class ConstantErrorResponse:
     nodes: int
 
 
+def engine_threads() -> int:
+    """Threads one analysis may use for its independent blocks of work (1 or 2).
+
+    ``INSERR_THREADS`` if set; else 1 in a process told to use one BLAS thread
+    (``OMP_NUM_THREADS`` or ``OPENBLAS_NUM_THREADS`` = 1: a sweep's or a design's worker
+    processes, where the parallelism is across points); else 2 if the machine has two
+    cores or more. The work is split the same way whatever the count (see
+    :data:`SPLIT_FINE`), so the results do not depend on it.
+    """
+    chosen = os.environ.get("INSERR_THREADS")
+    if chosen:
+        return max(1, int(chosen))
+    if "1" in (os.environ.get("OMP_NUM_THREADS"), os.environ.get("OPENBLAS_NUM_THREADS")):
+        return 1
+    return 2 if (os.cpu_count() or 1) >= 2 else 1
+
+
+def run_blocks(tasks: list) -> list:
+    """Results of the callables ``tasks`` (independent, writing disjoint outputs), on
+    :func:`engine_threads` threads (numpy releases the GIL in its large operations)."""
+    threads = engine_threads()
+    if threads < 2 or len(tasks) < 2:
+        return [task() for task in tasks]
+    with ThreadPoolExecutor(max_workers=min(threads, len(tasks))) as pool:
+        futures = [pool.submit(task) for task in tasks]
+        return [f.result() for f in futures]
+
+
+_BLAS: list = []  # the process's ThreadpoolController, found once (finding it costs ~1 ms)
+
+
+def single_thread_blas():
+    """Context in which BLAS runs on one thread.
+
+    The engine's matrix products are many and small or medium: a multi-threaded BLAS
+    costs more than it saves there (its threads spin while waiting, and fight with
+    the processes of a sweep or with other programs).
+    """
+    if not _BLAS:
+        _BLAS.append(ThreadpoolController())
+    return _BLAS[0].limit(limits=1, user_api="blas")
+
+
 def _grid_step(t: np.ndarray) -> float | None:
     """Step of a uniform grid 0, h, 2h, ... (its last point may be shorter), else None."""
     if len(t) < 2 or t[0] != 0.0:
@@ -573,9 +623,7 @@ def constant_error_response(
     -------
     ConstantErrorResponse
     """
-    # Many small and medium matrix products: a multi-threaded BLAS costs more than it
-    # saves here, and fights with the processes of a sweep.
-    with threadpool_limits(limits=1, user_api="blas"):
+    with single_thread_blas():
         return _constant_error_response(model, history, sources, t_fine, t_coarse)
 
 
@@ -611,28 +659,41 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     run.z_end = scan(lam, 0.0, z0, full.b, run.incr[run.src] if run.src is not None else run.incr)
     run.z_start = np.concatenate([z0[None], run.z_end[:-1]])
 
-    # Fine outputs in blocks (a 720 h run at 1 s has 2.6 million of them).
+    # Fine outputs in blocks (a 720 h run at 1 s has 2.6 million of them), and the
+    # per-source responses: independent pieces of work, on up to engine_threads().
     fine = np.empty((len(t_fine), 9))
     h = _grid_step(t_fine)
-    stop = len(t_fine)
-    if lift is not None:
-        stop = _lifted_fine(run, modes, lift, t_fine, h, fine)  # all outputs after t0
-    for lo in range(0, stop, CHUNK_FINE):
-        tb = t_fine[lo : min(lo + CHUNK_FINE, stop)]
-        at_zero = tb <= MERGE
-        inside = np.flatnonzero(~at_zero)
-        block = fine[lo : lo + len(tb)]
-        block[at_zero] = modes.to_nav(z0[None])[0]
-        if len(inside):
-            block[inside] = run.fine_nav(tb[inside], h)
 
-    # Per source: modal inputs per coarse interval, then the scan over coarse intervals.
-    z_src0 = modes.to_modes(sources.x0, axis=0)  # (R, N)
-    coarse_z = np.empty((len(t_coarse), modes.n_modes, sources.n), dtype=complex)
-    coarse_z[0] = z_src0
-    if len(t_coarse) > 1:
-        coarse_z[1:] = scan(lam, float(t_coarse[0]), z_src0, t_coarse[1:], inputs[1:])
-    coarse = modes.to_nav(coarse_z * sources.value[None, None, :], axis=1)
+    def per_source() -> np.ndarray:
+        # Modal inputs per coarse interval, then the scan over coarse intervals.
+        z_src0 = modes.to_modes(sources.x0, axis=0)  # (R, N)
+        coarse_z = np.empty((len(t_coarse), modes.n_modes, sources.n), dtype=complex)
+        coarse_z[0] = z_src0
+        if len(t_coarse) > 1:
+            coarse_z[1:] = scan(lam, float(t_coarse[0]), z_src0, t_coarse[1:], inputs[1:])
+        return modes.to_nav(coarse_z * sources.value[None, None, :], axis=1)
+
+    def fine_block(lo: int, hi: int):
+        def work() -> None:
+            tb = t_fine[lo:hi]
+            at_zero = tb <= MERGE
+            inside = np.flatnonzero(~at_zero)
+            block = fine[lo:hi]
+            block[at_zero] = modes.to_nav(z0[None])[0]
+            if len(inside):
+                block[inside] = run.fine_nav(tb[inside], h)
+
+        return work
+
+    if lift is not None:
+        # All outputs after t0 from the periods' states; the first ones below.
+        tasks = _lifted_fine(run, modes, lift, t_fine, h, fine)
+        stop = tasks.pop()
+    else:
+        stop, tasks = len(t_fine), []
+    run.prepare_fine(h)  # tables shared by the blocks, made once before they start
+    tasks += [fine_block(lo, hi) for lo, hi in _blocks(stop)]
+    coarse = run_blocks([per_source] + tasks)[0]
     counts = {
         name: int(np.count_nonzero(win.kind == k))
         for name, k in (
@@ -647,14 +708,25 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     return ConstantErrorResponse(t_fine, fine, t_coarse, coarse, counts, run.nodes)
 
 
-def _lifted_fine(run, modes: NavModes, lift, t: np.ndarray, h: float, out: np.ndarray) -> int:
+def _blocks(n: int) -> list[tuple[int, int]]:
+    """``(lo, hi)`` blocks of ``n`` fine outputs: at most :data:`CHUNK_FINE` each, and at
+    least two above :data:`SPLIT_FINE` (equal sizes; a function of ``n`` only)."""
+    if n <= 0:
+        return []
+    count = max(-(-n // CHUNK_FINE), 2 if n > SPLIT_FINE else 1)
+    edges = np.linspace(0, n, count + 1).round().astype(int)
+    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:], strict=True)]
+
+
+def _lifted_fine(run, modes: NavModes, lift, t: np.ndarray, h: float, out: np.ndarray) -> list:
     """Fine outputs of a periodic run: ``z(t0 + k P + s) = e^{lambda s} Z_k + p(s)``.
 
     ``Z_k`` is the state at the start of period k (from the window scan) and ``p`` the
     response of one period from a zero state (the same for every period, by
     periodicity), so the outputs of all periods are one small real matrix product per
-    navigation state. Fills ``out[j0:]`` (from ``t0`` on) and returns ``j0``; the
-    outputs before ``t0`` are left to the caller.
+    navigation state. Returns the tasks that fill ``out[j0:]`` (from ``t0`` on; blocks
+    of periods, :func:`_blocks`) followed by ``j0``; the outputs before ``t0`` are left
+    to the caller.
     """
     t0, period = lift
     j0 = int(round(t0 / h))
@@ -677,12 +749,23 @@ def _lifted_fine(run, modes: NavModes, lift, t: np.ndarray, h: float, out: np.nd
     b = np.concatenate(
         [(e[:, None, :] * vw[None]).real, (e[:, None, :] * vw[None]).imag], axis=2
     )  # (n_s, 9, 2R)
-    hom = (a @ b.reshape(-1, 2 * len(lam)).T).reshape(n_per, n_s, 9)
+    bt = b.reshape(-1, 2 * len(lam)).T  # (2R, n_s 9)
     part = (p @ vw.T).real  # (n_s, 9)
-    vals = (hom + part[None]).reshape(-1, 9)
     n = len(t) - 1 - j0
-    out[j0 + 1 :] = vals[:n]
-    return j0 + 1
+    # Periods in blocks of about the fine blocks' size (each writes its own rows).
+    per_block = max(1, -(-(_blocks(n_per * n_s)[0][1]) // n_s))
+
+    def periods(k0: int, k1: int):
+        def work() -> None:
+            vals = ((a[k0:k1] @ bt).reshape(k1 - k0, n_s, 9) + part[None]).reshape(-1, 9)
+            lo = j0 + 1 + k0 * n_s
+            hi = min(j0 + 1 + k1 * n_s, j0 + 1 + n)
+            out[lo:hi] = vals[: hi - lo]
+
+        return work
+
+    tasks = [periods(k, min(k + per_block, n_per)) for k in range(0, n_per, per_block)]
+    return tasks + [j0 + 1]
 
 
 def _lifting(history, t_fine: np.ndarray, t_coarse: np.ndarray) -> tuple[float, float] | None:
@@ -867,17 +950,21 @@ class _Run:
         feats = feats.reshape(len(idx), ROTATION_SAMPLES, N_FEATURES)
         # F_k = (1/5) sum_j F(theta_j) e^{-i k theta_j}, k = -2..2
         dft = np.exp(-1j * ks[:, None] * theta[None, :]) / ROTATION_SAMPLES  # (5 k, 5 j)
-        fk = np.einsum("kj,wjf->wkf", dft, feats)  # (W, 5, 63)
+        fk = np.matmul(dft.real, feats) + 1j * np.matmul(dft.imag, feats)  # (W, 5, 63)
         nu = ks[None, :] * rho[:, None]  # (W, 5) rad/s
         length = win.b[idx] - win.a[idx]
         # int_0^L e^{lambda (L - tau)} e^{i nu tau} dtau, per window, harmonic, mode.
         zl = (1j * nu[:, :, None] - lam[None, None, :]) * length[:, None, None]
         wt = (np.exp(lam[None, :] * length[:, None]) * length[:, None])[:, None, :] * phi1(zl)
-        uk = np.einsum("wkf,rf->wkr", fk, self.a_sig)  # signed input per harmonic
-        self.incr[idx] = np.einsum("wkr,wkr->wr", uk, wt)
+        uk = fk @ self.a_sig.T  # (W, 5, R): signed input per harmonic
+        self.incr[idx] = (uk * wt).sum(axis=1)
         j = win.coarse[idx]
         to_c = self._to_coarse(win.b[idx], j)  # (W, R)
-        y = np.einsum("wkr,wkf->wrf", wt * to_c[:, None, :], fk)
+        # y[w, r, f] = sum_k wt to_c [w, k, r] fk[w, k, f]: five broadcast products.
+        wtc = wt * to_c[:, None, :]
+        y = wtc[:, 0, :, None] * fk[:, 0, None, :]
+        for k in range(1, ROTATION_SAMPLES):
+            y += wtc[:, k, :, None] * fk[:, k, None, :]
         jj, sums = _group_sum(j, y)
         self._add_features(jj, sums)
         self.rotation_uk = np.zeros((len(win.a), ROTATION_SAMPLES, len(lam)), dtype=complex)
@@ -1058,12 +1145,19 @@ class _Run:
         alpha, beta = win.a[idx] - start, win.b[idx] - start
         jm = integration_matrix(np.concatenate([alpha, beta]) / half - 1.0, n) * half
         dj = jm[len(idx) :] - jm[: len(idx)]  # (P, n): int_alpha^beta of each node's share
-        wq = dj[:, :, None] * np.exp(
-            lam[None, None, :] * (beta[:, None] - s_nodes[None, :])[..., None]
-        )
-        feats = fv[0, win.phase[idx]]  # (P, n, 63) vehicle features
-        wt = np.swapaxes(wq, 1, 2)  # (P, R, n)
-        y = np.matmul(wt.real, feats) + 1j * np.matmul(wt.imag, feats)  # (P, R, 63) to b
+        # y[p] = e^{lambda beta_p} sum_q dj[p, q] e^{-lambda s_q} F[phase_p, q]: the template
+        # weighted by e^{-lambda s_q} once per phase, then one real product per phase
+        # (complex entries as pairs of reals) instead of one small product per window.
+        nr = len(lam)
+        tmpl = np.exp(-lam[None, :, None] * s_nodes[:, None, None]) * fv[0][:, :, None, :]
+        tmpl = tmpl.view(float).reshape(fv.shape[1], n, nr * 2 * N_FEATURES)  # (m, n, 2 R 63)
+        ph = win.phase[idx]
+        order = np.argsort(ph, kind="stable")
+        cuts = np.flatnonzero(ph[order][1:] != ph[order][:-1]) + 1
+        y = np.empty((len(idx), nr, N_FEATURES), dtype=complex)
+        for sel in np.split(order, cuts):
+            y[sel] = (dj[sel] @ tmpl[ph[sel[0]]]).view(complex).reshape(len(sel), nr, N_FEATURES)
+        y *= np.exp(lam[None, :] * beta[:, None])[:, :, None]  # (P, R, 63) to b
         self.incr[idx] = np.einsum("prf,prf->pr", y, self.cached_forms[inv])
         # Per source, per table: the source form seen in the vehicle features
         # (vehicle_to_imu is linear: its matrix is its image of the unit features).
@@ -1080,8 +1174,8 @@ class _Run:
             sel = np.flatnonzero(inv == t)
             lt = vehicle_to_imu(np.eye(N_FEATURES)[None], mats[t][None])[0]  # (63 veh, 63 imu)
             per = np.empty((len(sel), form.shape[0], form.shape[2]), dtype=complex)
-            for r in range(form.shape[0]):
-                per[:, r, :] = yc[sel, r, :] @ (lt @ form[r])
+            for k in range(form.shape[0]):
+                per[:, k, :] = yc[sel, k, :] @ (lt @ form[k])
             jj, sums = _group_sum(win.coarse[idx[sel]], per)
             self.inputs[jj] += sums
 
@@ -1123,6 +1217,11 @@ class _Run:
             lo = hi
 
     # --- fine output times --------------------------------------------------------------
+    def prepare_fine(self, dt_fine: float | None) -> None:
+        """Make the tables the fine-output blocks share (before they run at once)."""
+        if hasattr(self, "cached_template") and fine_aligned(self.step, dt_fine):
+            self._cached_nav_table(dt_fine)
+
     def fine_nav(self, t: np.ndarray, dt_fine: float | None) -> np.ndarray:
         """Signed navigation errors at times ``t`` (s, > 0, increasing), (len(t), 9).
 
@@ -1163,6 +1262,15 @@ class _Run:
         still = kind_run == STILL
         u_run = np.where(still[:, None], self.u_still[w_run], 0.0)
         x_run = ed * self.z_start[wf[first]] + table._phi_d * u_run
+        partial = self._partial_on_grid(kind_run, w_run, table, dt_fine)
+        if partial is not None:
+            # A partial stop [a, b] inside the phase step from c = a - alpha: its in-window
+            # part is e^{lambda dt} J(dt) = e^{lambda (alpha + dt)} I(alpha + dt) -
+            # e^{lambda dt} e^{lambda alpha} I(alpha), I the template's integral from c.
+            # The second term joins the window's start state; the first is the cached
+            # windows' tabulated block at the output's offset (alpha + dt) / h from c.
+            p_run, shift, _ = partial
+            x_run[p_run] -= ed[p_run] * shift
         coef = np.concatenate([x_run, u_run], axis=1).view(float)  # (runs, 4R): re, im pairs
         vw = (modes.out * modes.weight[None, :]).T  # (R, 9): x = Re(sum_r z_r vw[r])
         out = np.empty((len(k), 9))
@@ -1174,26 +1282,21 @@ class _Run:
         todo = kind != STILL
         cached_block = cached_key = None
         cached_run = kind_run == CACHED
-        if (
-            np.any(cached_run)
-            and fine_aligned(self.step, dt_fine)
-            and float(np.max(table.delta[cached_run], initial=0.0)) <= 1e-9
-        ):
-            # (|lambda| delta <= 1e-12: e^{lambda delta} = 1 to below round-off.)
+        if np.any(cached_run) and fine_aligned(self.step, dt_fine):
             nav = self._cached_nav_table(dt_fine)  # (C, m, nf, T, 9)
             n_cls, m, nf, n_t = nav.shape[:4]
             blocks = np.moveaxis(nav, 3, 2).reshape(n_cls * m * n_t, nf * 9)
             cached_block = np.concatenate([blocks, np.zeros((1, nf * 9))])
-            wc = w_run[cached_run]
+            # Only windows whose outputs are all in this block and on the grid from its
+            # start (|lambda| delta <= 1e-12: e^{lambda delta} = 1 to below round-off);
+            # one cut by the block's edge keeps its in-window integrals.
+            whole = cached_run & (counts == nf) & (k[first] == 1) & (table.delta <= 1e-9)
+            wc = w_run[whole]
             cached_key = np.full(len(first), len(blocks))
-            cached_key[cached_run] = (
+            cached_key[whole] = (
                 self.cached_class[wc] * m + self.win.phase[wc]
             ) * n_t + self.cached_table[wc]
-            whole = cached_run & (counts == nf) & (k[first] == 1)
-            if not np.all(whole[cached_run]):
-                cached_block = cached_key = None  # a cached window not whole on the grid
-            else:
-                todo &= kind != CACHED
+            todo &= ~whole[run]
         k0 = k[first]
         span = int(counts.max()) + 1
         shapes, shape_of = np.unique(k0 * span + counts, return_inverse=True)
@@ -1214,6 +1317,11 @@ class _Run:
                 vals += cached_block[cached_key[runs]]
             pts = (first[runs][:, None] + np.arange(c)[None, :]).ravel()
             out[pts] = vals.reshape(-1, 9)
+        if partial is not None:
+            p_run, _, rows = partial
+            pts = np.flatnonzero(np.isin(run, np.flatnonzero(p_run)))
+            out[pts] += rows(pts, run, dt)
+            todo &= kind != PARTIAL
         # In-window integrals of the other kinds, added in modal form.
         other = np.flatnonzero(todo)
         if len(other):
@@ -1223,6 +1331,37 @@ class _Run:
             )
             out[other] += modes.to_nav(e * ints)
         return out
+
+    def _partial_on_grid(self, kind_run, w_run, table, dt_fine):
+        """Partial stops on an output grid aligned with the phase steps, for
+        :meth:`_nav_on_grid`: ``(runs, shift, rows)`` or None.
+
+        ``runs`` marks the runs in partial windows, ``shift`` (their count, R) is
+        ``e^{lambda alpha} I(alpha)`` of each (taken off the start state), and
+        ``rows(pts, run, dt)`` gives the tabulated navigation errors
+        ``e^{lambda (alpha + dt)} I(alpha + dt)`` of outputs ``pts``.
+        """
+        p_run = kind_run == PARTIAL
+        if not np.any(p_run) or not fine_aligned(self.step, dt_fine):
+            return None
+        wp = w_run[p_run]
+        alpha = self.win.a[wp] - np.floor(self.win.a[wp] / self.step + 1e-9) * self.step
+        shift = np.exp(self.lam[None, :] * alpha[:, None]) * self._cached_integrals_anywhere(
+            wp, alpha
+        )
+        nav = self._cached_nav_table(dt_fine)  # (C, m, nf, T, 9)
+        n_cls, m, nf, n_t = nav.shape[:4]
+        flat = nav.reshape(-1, 9)
+        alpha_run = np.zeros(len(w_run))
+        alpha_run[p_run] = alpha
+
+        def rows(pts, run, dt):
+            wq = w_run[run[pts]]
+            pos = np.rint((alpha_run[run[pts]] + dt[pts]) / dt_fine).astype(int)  # 1..nf
+            key = ((self.cached_class[wq] * m + self.win.phase[wq]) * nf + pos - 1) * n_t
+            return flat[key + self.cached_table[wq]]
+
+        return p_run, shift, rows
 
     def fine_states(self, t: np.ndarray, dt_fine: float | None) -> np.ndarray:
         """Signed modal states at times ``t`` (s, > 0, increasing), (len(t), R)."""
@@ -1395,15 +1534,31 @@ class _Run:
             key, axis=0, return_inverse=True, return_counts=True
         )
         shape_of = shape_of.reshape(-1)
-        for sh in np.flatnonzero(shape_count > 1):
-            members = np.flatnonzero(shape_of == sh)
-            m = int(win.n[wins[members[0]]])
+        shared = np.flatnonzero(shape_count > 1)
+        groups = [np.flatnonzero(shape_of == sh) for sh in shared]
+        # The shared integration matrices (cnt, m) of all shapes with the same point
+        # count m in one call (a run has tens of shapes, each with a few outputs).
+        jmats: list = [None] * len(groups)
+        n_of = np.array([int(win.n[wins[g[0]]]) for g in groups], dtype=int)
+        for m in np.unique(n_of):
+            which = np.flatnonzero(n_of == m)
+            xs, halves, sizes = [], [], []
+            for i in which:
+                g0 = groups[i][0]
+                half = 0.5 * length[g0]
+                cnt = int(counts[g0])
+                xs.append(dt[first_pt[g0] : first_pt[g0] + cnt] / half - 1.0)
+                halves.append(np.full(cnt, half))
+                sizes.append(cnt)
+            mat = integration_matrix(np.concatenate(xs), int(m)) * np.concatenate(halves)[:, None]
+            for i, part in zip(which, np.split(mat, np.cumsum(sizes)[:-1]), strict=True):
+                jmats[i] = part
+        for members, jmat in zip(groups, jmats, strict=True):
+            m = jmat.shape[1]
             g = self._direct_g(wins[members], m)  # (Wg, m, R)
-            half = 0.5 * length[members[0]]
-            cnt = int(counts[members[0]])
+            cnt = jmat.shape[0]
             # Points of one window are consecutive (sorted times): first_pt .. + count.
             pts = first_pt[members][:, None] + np.arange(cnt)[None, :]  # (Wg, cnt)
-            jmat = integration_matrix(dt[pts[0]] / half - 1.0, m) * half  # (cnt, m), shared
             vals = np.tensordot(jmat, g, axes=([1], [1]))  # (cnt, Wg, R)
             out[pts.T.ravel()] = vals.reshape(cnt * len(members), len(lam))
         # Windows of a shape of their own (irregular stop times): point by point.
@@ -1559,8 +1714,13 @@ def white_noise_covariance(
     ndarray, shape (M, 9, 9)
         Covariance of psi (rad), dv (m/s), dr (m), ENU, symmetrised.
     """
-    modes = NavModes(model)
     t = np.asarray(t, dtype=float)
+    # The same site, noise and grid give the same covariance: the points of a sweep or
+    # a design (one worker runs many) compute it once. A copy goes out (callers own it).
+    key = (model, float(arw), float(vrw), t.tobytes())
+    if key in _WHITE_CACHE:
+        return _WHITE_CACHE[key].copy()
+    modes = NavModes(model)
     inv, out = modes.inv_all, modes.out_all
     g = np.zeros((9, 6))
     g[0:3, 0:3] = -np.eye(3)
@@ -1570,9 +1730,14 @@ def white_noise_covariance(
     q = np.diag([arw**2] * 3 + [vrw**2] * 3)
     m = inv @ g @ q @ g.T @ inv.conj().T
     p = (out @ (m[None] * _xi(modes, t)) @ out.conj().T).real
-    return 0.5 * (p + np.swapaxes(p, 1, 2))
+    p = 0.5 * (p + np.swapaxes(p, 1, 2))
+    if len(_WHITE_CACHE) >= 4:
+        _WHITE_CACHE.pop(next(iter(_WHITE_CACHE)))
+    _WHITE_CACHE[key] = p
+    return p.copy()
 
 
+_WHITE_CACHE: dict = {}
 _XI_CACHE: dict = {}
 
 
@@ -1640,7 +1805,7 @@ def gauss_markov_covariance(
     ndarray, shape (M, 9, 9)
         Covariance of psi (rad), dv (m/s), dr (m), ENU, symmetrised.
     """
-    with threadpool_limits(limits=1, user_api="blas"):
+    with single_thread_blas():
         return _gauss_markov(model, history, sigma, tau, sensor, np.asarray(t, dtype=float))
 
 

@@ -510,7 +510,12 @@ def attitude_error(site: Site, nav: np.ndarray) -> np.ndarray:
         heading too large).
     """
     nav = np.asarray(nav, dtype=float)
-    return nav[..., PSI] + position_angle(site, nav[..., DR])
+    # phi = psi + dtheta(dr), dtheta linear in dr: one product with the (9, 3) map
+    # (a quarter of a million outputs per run: one pass instead of a dozen strided ones).
+    a = np.zeros((9, 3))
+    a[PSI] = np.eye(3)
+    a[DR] = position_angle(site, np.eye(3))  # row k: dtheta of a unit dr_k
+    return nav[..., :9] @ a
 
 
 @dataclass(frozen=True)

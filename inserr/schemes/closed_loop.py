@@ -336,6 +336,16 @@ class _TurnSearch:
         hdot = heading_rate_bound(motion)
         lo, hi = self.geo.slope_bounds()
         self.lipschitz = None
+        self.roundoff = None  # bound of |closed form - sampled| of cos psi, sin psi
+        self.short_ends = None  # the fallback's stretches (see best_sample)
+        self.short_bend = self.short_reach = None
+        # The fallback's turn: the samples short of a whole revolution.
+        self.n_short = ns = int(np.count_nonzero(rule.rate * j / f < 2 * math.pi - 1e-9))
+        # The closed form's terms along those samples: e^{i a} = e^{i a0} e^{i da}, so
+        # up e^{i a} + um e^{-i a} = e^{i a0} (up e^{i da}) + e^{-i a0} (um e^{-i da}).
+        up, um, _ = self.geo.coefficients
+        turn = {d: np.exp(1j * self.da[d][:ns]) for d in (1.0, -1.0)}
+        self.short_terms = {d: (up * e, um * np.conj(e)) for d, e in turn.items()}
         if hdot is None or not math.isfinite(hi) or self.per_turn < 2:
             return
         self.lipschitz = lip = hdot + w * max(abs(lo), abs(hi))  # rad/s
@@ -345,6 +355,9 @@ class _TurnSearch:
         # unnormalised closed form is off by at most 1 - min_horizontal.
         t_max = duration + rule.stop + 2 * math.pi / w
         slack = 1e-12 * (10.0 + abs(motion.heading) + 2.0 * hdot * t_max)
+        # The closed form divides by |w| >= min_horizontal: round-off grows by its inverse.
+        min_h = self.geo.min_horizontal()
+        self.roundoff = slack / min_h if min_h > 0 else None
         # The coarse look keeps only the larger of the exp(+-i a) terms of the closed
         # form, unnormalised: off by at most the others plus 1 - min_horizontal.
         up, um, cz = self.geo.coefficients
@@ -366,6 +379,18 @@ class _TurnSearch:
             self.reach = lip * gap + 2.0 * slack
         # The kept term's phase from the turn at the coarse samples, both directions.
         self.turned = {d: self.sense * d * w * self.coarse_dt for d in (1.0, -1.0)}
+        # The fallback's look at the turn short of a revolution: samples a second apart
+        # (ending at the last short one) and, per stretch between them, how far cos psi
+        # and sin psi can leave the chord (with the curvature bound) or move along it
+        # (with the slope bound only); see best_sample.
+        ends = np.unique(np.append(j[:ns:stride], ns))
+        g = np.diff(ends) / f
+        self.short_ends = ends
+        if hddot is not None and math.isfinite(curve):
+            self.short_bend, self.short_reach = (hddot + w * w * curve + lip * lip) * g**2 / 8, None
+        else:
+            self.short_bend, self.short_reach = None, lip * g
+        self.short_rot = {d: np.exp(1j * d * w * ends / f) for d in (1.0, -1.0)}
 
     def values(self, t0: float, a0: float, direction: float, which: int, j: np.ndarray):
         """``(main, other)`` at samples ``j`` of a turn from ``(t0, a0)`` (sampled rule)."""
@@ -468,13 +493,168 @@ class _TurnSearch:
         return None
 
     def best_sample(self, t0, a0, direction, which, c, s_other) -> int:
-        """The fallback's sample number: the best sample of one turn (class docstring)."""
-        main, other = self.values(t0, a0, direction, which, self.j)
+        """The fallback's sample number: the best sample of one turn (class docstring).
+
+        The choice is the sampled rule's (:func:`_best_sample` on :meth:`values` of the
+        whole turn). Where a round-off bound is known the turn is looked at in closed
+        form (:meth:`OuterAxisHeading.phasor`, within ``tol`` of the sampled values):
+        first a second apart, where bounds on how far ``cos psi`` and ``sin psi`` move
+        between those samples leave only the stretches that can hold the best sample,
+        the turn's largest or smallest score (they set the tie tolerance) or a sample
+        whose sign condition is unknown (:meth:`_stretches`); then at every sample of
+        those stretches; :meth:`values` is computed only at the samples that can decide
+        the choice: those whose sign condition is in doubt, those that can be the
+        turn's largest or smallest score, and those that can be the best or tie with it.
+        """
+        ns = self.n_short
+        if self.roundoff is None:
+            main, other = self.values(t0, a0, direction, which, self.j)
+            expr = main[:ns] + c
+            sign_ok = (np.sign(other[:ns]) == -s_other) | (s_other == 0)
+            return _best_sample(np.abs(expr), sign_ok) + 1
+        tol = self.roundoff + 1e-12 * abs(a0)  # |closed form - sampled|, main and other
+        e0 = cmath.exp(1j * a0)
+        found = self._stretches(t0, e0, direction, which, c, s_other, tol)
+        if found is not None:
+            got = self._decide(t0, a0, e0, direction, which, c, s_other, tol, *found)
+            if got is not None:
+                return got
+        # Every sample short of a revolution (the bounds could not settle the choice).
+        return self._decide(t0, a0, e0, direction, which, c, s_other, tol, np.arange(ns))
+
+    def _decide(self, t0, a0, e0, direction, which, c, s_other, tol, idx, any_ok=None, tie=None):
+        """:meth:`best_sample` on the samples ``idx`` (0-based, sorted), which must hold
+        every sample that can decide it. ``any_ok``: whether any sample of the turn
+        meets the sign condition (None: decided on ``idx``, which is then the whole
+        turn). ``tie``: bounds ``(lo, hi)`` of :func:`_best_sample`'s tie tolerance
+        (None: computed from the turn's exact largest and smallest scores, which
+        ``idx`` then holds); None is returned if the choice depends on where in
+        ``(lo, hi)`` it is."""
+        t = t0 + self.dt[idx]
+        plus, minus = self.short_terms[direction]
+        w = plus[idx] * e0 + minus[idx] * e0.conjugate() + self.geo.coefficients[2]
+        psi = np.exp(1j * self.motion.heading_at(t)) * w
+        psi /= np.abs(w)
+        main, other = (psi.real, psi.imag) if which == 0 else (psi.imag, psi.real)
+        score = np.abs(main + c)
+        n = len(idx)
+        # Samples whose sign condition the closed form cannot decide.
+        if s_other == 0:
+            sure, doubt = np.ones(n, dtype=bool), np.zeros(n, dtype=bool)
+        else:
+            side = -s_other * other
+            sure, doubt = side > tol, np.abs(side) <= tol
+        if tie is None:
+            top = score >= score.max() - 2 * tol
+            bottom = score <= score.min() + 2 * tol
+        else:
+            top = bottom = np.zeros(n, dtype=bool)
+        need = np.flatnonzero(doubt | top | bottom)
+        exact = np.full(n, np.nan)
+        ok = sure.copy()
+        if len(need):
+            ex_main, ex_other = self.values(t0, a0, direction, which, idx[need] + 1)
+            exact[need] = np.abs(ex_main + c)
+            ok[need] = (np.sign(ex_other) == -s_other) | (s_other == 0)
+        ok &= sure | doubt  # the others fail the condition for certain
+        if any_ok is None:
+            any_ok = bool(ok.any())
+        pool = ok if any_ok else np.ones(n, dtype=bool)
+        if tie is None:
+            # _best_sample's tie tolerance from the exact range of the scores.
+            lo = hi = max(1e-12, 1e-9 * float(np.nanmax(exact[top]) - np.nanmin(exact[bottom])))
+        else:
+            lo, hi = tie
+        cand = pool & (score <= score[pool].min() + 2 * tol + hi)
+        rest = np.flatnonzero(cand & np.isnan(exact))
+        if len(rest):
+            ex_main, _ = self.values(t0, a0, direction, which, idx[rest] + 1)
+            exact[rest] = np.abs(ex_main + c)
+        sel = np.flatnonzero(cand)
+        vals = exact[sel]
+        tied = vals <= vals.min() + lo  # as _best_sample compares
+        if np.any((vals <= vals.min() + hi) & ~tied):
+            return None  # a tie or not, depending on the tolerance's exact value
+        return int(idx[sel[np.flatnonzero(tied)[0]]]) + 1
+
+    def _stretches(self, t0, e0, direction, which, c, s_other, tol):
+        """``(samples, any_ok)``: the samples (0-based, sorted) of the stretches that
+        :meth:`best_sample` must look at, and whether any sample of the turn meets the
+        sign condition; None when the bounds cannot tell (every sample is looked at).
+
+        Per stretch between two looked-at samples ``f_0, f_1`` (``expr`` or the sign
+        side ``-s_other * other``, closed form, within ``tol``), every sample in it is
+        within ``[min(f_0, f_1) - b, max(f_0, f_1) + b]`` (``b`` the bend bound, off the
+        chord) or ``[(f_0 + f_1 - r) / 2, (f_0 + f_1 + r) / 2]`` (``r`` = slope bound x
+        length); likewise ``|expr|``.
+        """
+        ends = self.short_ends
+        if ends is None:
+            return None
+        i0 = ends - 1
+        t = t0 + self.dt[i0]
+        w = (
+            (self.geo.coefficients[0] * e0) * self.short_rot[direction]
+            + (self.geo.coefficients[1] * e0.conjugate()) * np.conj(self.short_rot[direction])
+            + self.geo.coefficients[2]
+        )
+        psi = np.exp(1j * self.motion.heading_at(t)) * w / np.abs(w)
+        main, other = (psi.real, psi.imag) if which == 0 else (psi.imag, psi.real)
         expr = main + c
-        sign_ok = (np.sign(other) == -s_other) | (s_other == 0)
-        # A fallback never takes a whole revolution (it would only return to the start).
-        short = self.rule.rate * self.j / self.rule.f < 2 * math.pi - 1e-9
-        return _best_sample(np.abs(expr[short]), sign_ok[short]) + 1
+        # The closed form here (e^{i a} from e^{i a0} e^{i da}) adds a few ulp to tol.
+        tol = tol + 1e-12
+
+        def bounds(f, absolute):
+            f0, f1 = f[:-1], f[1:]
+            if absolute:
+                a0_, a1_ = np.abs(f0), np.abs(f1)
+                if self.short_bend is not None:
+                    lo = np.where(f0 * f1 <= 0, 0.0, np.minimum(a0_, a1_)) - self.short_bend
+                    hi = np.maximum(a0_, a1_) + self.short_bend
+                else:
+                    lo = 0.5 * (a0_ + a1_ - self.short_reach)
+                    hi = 0.5 * (a0_ + a1_ + self.short_reach)
+            elif self.short_bend is not None:
+                lo = np.minimum(f0, f1) - self.short_bend
+                hi = np.maximum(f0, f1) + self.short_bend
+            else:
+                lo = 0.5 * (f0 + f1 - self.short_reach)
+                hi = 0.5 * (f0 + f1 + self.short_reach)
+            return lo - 2 * tol, hi + 2 * tol
+
+        lo_e, hi_e = bounds(expr, True)
+        score = np.abs(expr)
+        if s_other == 0:
+            sure = np.ones(len(lo_e), dtype=bool)
+            never = ~sure
+        else:
+            lo_s, hi_s = bounds(-s_other * other, False)
+            sure, never = lo_s > 0, hi_s < 0
+        if sure.any():
+            any_ok = True
+        elif never.all():
+            any_ok = False
+        else:
+            return None  # whether any sample meets the condition is decided sample by sample
+        may_pool = ~never if any_ok else np.ones(len(lo_e), dtype=bool)
+        # An upper bound of the best score: a looked-at sample surely in the pool.
+        if any_ok:
+            side = -s_other * other if s_other != 0 else np.ones(len(expr))
+            known = side > 2 * tol
+            if not known.any():
+                return None
+            best = float(score[known].min()) + 2 * tol
+        else:
+            best = float(score.min()) + 2 * tol
+        # Bounds of the rule's tie tolerance 1e-9 x (range of the exact scores): the
+        # range is at least that of the looked-at samples, at most that of the bounds.
+        tie_lo = max(1e-12, 1e-9 * float(score.max() - score.min() - 2 * tol))
+        tie_hi = max(1e-12, 1e-9 * float(hi_e.max() - max(lo_e.min(), 0.0)))
+        keep = may_pool & (lo_e <= best + 4 * tol + tie_hi)
+        first = ends[:-1][keep]
+        last = ends[1:][keep]
+        idx = np.unique(np.concatenate([i0, _ranges(first - 1, last)]))
+        return idx, any_ok, (tie_lo, tie_hi)
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from inserr.core.errors import InputError
-from inserr.core.rotations import rot_x, rot_z
+from inserr.core.rotations import rot_x, rot_z_times
 from inserr.model.attitude_history import Pieces
 from inserr.model.timeline import Timeline
 from inserr.schemes.turntable import TableSchedule, gimbal_axis_b, table_dcm
@@ -168,6 +168,9 @@ class ScheduleHistory:
         self._breaks = breaks
         mid = 0.5 * (breaks[:-1] + breaks[1:])
         self._segment = np.clip(np.searchsorted(table.t0, mid, side="right") - 1, 0, len(table) - 1)
+        # Per table segment, for evaluate (called on tens of thousands of points per run).
+        self._kind = np.array(table.kind)
+        self._outer = np.array([g == "outer" for g in table.gimbal], dtype=bool)
 
     @property
     def duration(self) -> float:
@@ -261,7 +264,7 @@ class ScheduleHistory:
     def evaluate_vehicle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``C_b^n`` (N, 3, 3) and ``w_nb^n`` (N, 3, rad/s, ENU) of the vehicle at times ``t``."""
         t = np.asarray(t, dtype=float)
-        return _rot_z(-self.motion.heading_at(t)) @ self.motion.tilt, self.motion.rate_n(t)
+        return rot_z_times(-self.motion.heading_at(t), self.motion.tilt), self.motion.rate_n(t)
 
     def evaluate(self, t: np.ndarray, piece: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``C_s^n`` (N, 3, 3) and ``w_ns^n`` (N, 3, rad/s, ENU) at times ``t`` of ``piece``."""
@@ -269,14 +272,12 @@ class ScheduleHistory:
         k = self._segment[np.asarray(piece)]
         tab = self.table
         # Heading-only vehicle motion: C_b^n = rot_z(-H) C_tilt (two sines per time).
-        c_bn = _rot_z(-self.motion.heading_at(t)) @ self.motion.tilt
+        c_bn = rot_z_times(-self.motion.heading_at(t), self.motion.tilt)
         w_nb = self.motion.rate_n(t)
         a, b = tab.angles_at(t, self.motion)
-        c_sb = (
-            _rot_z(a) if tab.mounting is None and not np.any(b) else table_dcm(a, b, tab.mounting)
-        )
-        kind = np.array(tab.kind)[k]
-        outer = np.array([g == "outer" for g in tab.gimbal])[k]
+        plain = tab.mounting is None and not np.any(b)  # C_s^b = rot_z(a)
+        kind = self._kind[k]
+        outer = self._outer[k]
         rate = np.where(kind == "rotate", tab.rate[k], 0.0)
         a_dot = np.where(outer, rate, 0.0)
         b_dot = np.where(outer, 0.0, rate)
@@ -288,7 +289,9 @@ class ScheduleHistory:
         w_bs[:, 0] = b_dot * np.cos(a)
         w_bs[:, 1] = b_dot * np.sin(a)
         w = w_nb + np.einsum("nij,nj->ni", c_bn, w_bs)
-        return c_bn @ c_sb, w
+        if plain:
+            return _times_rot_z(c_bn, a), w
+        return c_bn @ table_dcm(a, b, tab.mounting), w
 
     def _isolation_rate(self, t, k, c_bn=None, w_nb=None, a=None, b=None) -> np.ndarray:
         """Outer-gimbal rate that keeps the IMU heading on its target (rad/s)."""
@@ -299,7 +302,9 @@ class ScheduleHistory:
             a, b = tab.angles_at(t, self.motion)
         m = np.eye(3) if tab.mounting is None else tab.mounting
         u = rot_x(b) @ (m @ np.array([0.0, 1.0, 0.0]))  # IMU y axis before the outer gimbal
-        ru = np.einsum("nij,nj->ni", rot_z(a), u)
+        ca, sa = np.cos(a), np.sin(a)
+        ru = np.stack([ca * u[..., 0] - sa * u[..., 1], sa * u[..., 0] + ca * u[..., 1],
+                       np.broadcast_to(u[..., 2], ca.shape)], axis=-1)  # rot_z(a) u  # fmt: skip
         v = np.einsum("nij,nj->ni", c_bn, ru)  # IMU y axis in n
         dv_dt = np.cross(w_nb, v)
         dv_da = np.einsum("nij,nj->ni", c_bn, np.cross(np.array([0.0, 0.0, 1.0]), ru))
@@ -312,15 +317,14 @@ class ScheduleHistory:
         return (tab.target_rate[k] - dpsi(dv_dt)) / dpsi(dv_da)
 
 
-def _rot_z(angle: np.ndarray) -> np.ndarray:
-    """:func:`inserr.core.rotations.rot_z` for many angles, built from one sine and cosine each."""
-    c, s = np.cos(angle), np.sin(angle)
-    out = np.zeros(np.shape(angle) + (3, 3))
-    out[..., 0, 0] = c
-    out[..., 0, 1] = -s
-    out[..., 1, 0] = s
-    out[..., 1, 1] = c
-    out[..., 2, 2] = 1.0
+def _times_rot_z(m: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """``m @ rot_z(angle)`` for (N, 3, 3) ``m`` and N angles, column by column: columns
+    ``c m_0 + s m_1``, ``-s m_0 + c m_1``, ``m_2``."""
+    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
+    out = np.empty_like(m)
+    out[:, :, 0] = c * m[:, :, 0] + s * m[:, :, 1]
+    out[:, :, 1] = c * m[:, :, 1] - s * m[:, :, 0]
+    out[:, :, 2] = m[:, :, 2]
     return out
 
 

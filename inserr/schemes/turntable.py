@@ -22,6 +22,7 @@ from __future__ import annotations
 import cmath
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -255,6 +256,9 @@ def isolation_angle(c_bn: np.ndarray, b, mounting: np.ndarray | None, target) ->
         Outer gimbal angle, rad, in [-2 pi, 2 pi] (not unwrapped; callers pick the
         branch).
     """
+    b = np.asarray(b, dtype=float)
+    if b.ndim and b.size and np.all(b == b.flat[0]):
+        b = b.flat[0]  # one inner angle for every attitude (a single-axis table): its parts once
     p, q, z = _yaxis_parts(b, mounting)
     c_bn = np.asarray(c_bn, dtype=float)
     cp = np.einsum("...ij,...j->...i", c_bn, p)
@@ -354,6 +358,16 @@ class TableSchedule:
             prev_kind, prev_sign = k, sign
         return n + int(self.meta.get("isolation_reversals", 0))
 
+    @cached_property
+    def _outer(self) -> np.ndarray:
+        """Per segment: whether the outer gimbal moves (kept: angles_at runs often)."""
+        return np.array([g == "outer" for g in self.gimbal], dtype=bool)
+
+    @cached_property
+    def _isolate(self) -> np.ndarray:
+        """Per segment: whether it is an isolation segment."""
+        return np.array([kd == "isolate" for kd in self.kind], dtype=bool)
+
     def angles_at(self, t: np.ndarray, motion=None) -> tuple[np.ndarray, np.ndarray]:
         """Outer and inner gimbal angles at given times.
 
@@ -378,10 +392,10 @@ class TableSchedule:
         k = np.clip(np.searchsorted(self.t0, t, side="right") - 1, 0, len(self.t0) - 1)
         tau = np.minimum(t - self.t0[k], self.duration[k])
         rate = self.rate[k]
-        outer = np.array([g == "outer" for g in self.gimbal])[k]
+        outer = self._outer[k]
         a = self.a0[k] + np.where(outer, rate * tau, 0.0)
         b = self.b0[k] + np.where(~outer, rate * tau, 0.0)
-        iso = np.array([kd == "isolate" for kd in self.kind])[k]
+        iso = self._isolate[k]
         if np.any(iso):
             if motion is None:
                 raise ValueError("isolation segments need the vehicle motion")

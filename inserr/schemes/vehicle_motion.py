@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from inserr.core.errors import InputError, require_finite
-from inserr.core.rotations import body_to_nav
+from inserr.core.rotations import body_to_nav, rot_z_times
 
 #: The senses in which a scenario may give headings, heading rates, yaw swings, heading
 #: histories and the IMU mounting heading (``motion.heading_convention``); the first is
@@ -144,9 +144,7 @@ class Motion:
             ``C_b^n``; a scalar ``t`` counts as one time.
         """
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        return body_to_nav(
-            self.heading_at(t), np.full(t.shape, self.pitch), np.full(t.shape, self.roll)
-        )
+        return rot_z_times(-self.heading_at(t).ravel(), self.tilt).reshape(t.shape + (3, 3))
 
     def rate_n(self, t: np.ndarray) -> np.ndarray:
         """Body angular velocity relative to n, ``w_nb^n = [0, 0, -heading_rate]``.
