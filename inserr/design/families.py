@@ -47,7 +47,7 @@ from inserr.core.units import DEG
 from inserr.scenario.schema import Scenario
 from inserr.schemes.open_loop import Step, TableScheme
 
-FAMILIES = ("single-axis", "nulling", "flexible", "dual-axis")
+FAMILIES = ("single-axis", "single-axis-golden", "nulling", "flexible", "dual-axis")
 #: Largest cycle integral of ``exp(i a)`` (s) a balanced single-axis cycle may leave: a
 #: millisecond of a bias per cycle, some 0.1 s over 72 h, far below anything reported.
 BALANCE_TOLERANCE = 1e-3
@@ -186,11 +186,13 @@ class SingleAxis(Family):
         half = min(round(180.0 / s["step_deg"]), self.k_max)
         out = [float((half, 0, -half, 0)[k % 4]) for k in range(self.n - 1)]
         out += [s["stop_range"][0]] * self.n
-        if len(self.variables()) > len(out):
+        if len(SingleAxis.variables(self)) > len(out):  # a free rate
             out.append(min(max(s["rate"], s["rate_range_deg"][0]), s["rate_range_deg"][1]))
         return out
 
-    def decode(self, x) -> Decoded:
+    def _cycle(self, x) -> tuple[np.ndarray, np.ndarray, float, dict[str, float]]:
+        """The balanced cycle of ``x``: stop positions (deg), stop times (s), rate (deg/s)
+        and the violations of the rules (positions empty when there is no turn)."""
         s = self.settings
         n = self.n
         x = list(x)
@@ -199,8 +201,6 @@ class SingleAxis(Family):
         pos_deg = [c * step for c in codes]  # positions at stops 0..n-1, then the closing 0
         dwell = np.array(x[n - 1 : 2 * n - 1], dtype=float)
         rate_deg = x[2 * n - 1] if len(x) > 2 * n - 1 else s["rate_range_deg"][0]
-        rate = rate_deg * DEG
-        lo, hi = s["stop_range"]
         violation: dict[str, float] = {}
         # Merge stops at the same position (no turn between them).
         stops: list[list[float]] = []  # [position deg, dwell]
@@ -213,42 +213,135 @@ class SingleAxis(Family):
             stops[0][1] += stops.pop()[1]
         if len(stops) < 2:
             violation["no_turn"] = 1.0
-            return Decoded(None, {}, violation, "no turn")
-        a = np.array([p for p, _ in stops]) * DEG
+            return np.zeros(0), np.zeros(0), rate_deg, violation
+        p = np.array([q for q, _ in stops])
         d = np.array([w for _, w in stops])
-        d, resid = balance(a, d, rate, lo, hi)
+        d = self._balanced(p, d, rate_deg, violation)
+        return p, d, rate_deg, violation
+
+    def _balanced(
+        self, p: np.ndarray, d: np.ndarray, rate_deg: float, violation: dict[str, float]
+    ) -> np.ndarray:
+        """Stop times ``d`` at positions ``p`` (deg) balanced; violations added in place."""
+        lo, hi = self.settings["stop_range"]
+        d, resid = balance(p * DEG, d, rate_deg * DEG, lo, hi)
         if resid > BALANCE_TOLERANCE:
-            violation["balance"] = resid / lo
+            violation["balance"] = violation.get("balance", 0.0) + resid / lo
         excess = float(np.sum(np.maximum(lo - d, 0.0)) + np.sum(np.maximum(d - hi, 0.0)))
         if excess > 1e-9:
-            violation["stop_range"] = excess / lo
-        m = len(stops)
-        steps, rows = [], []
-        for k in range(m):
-            nxt = stops[(k + 1) % m][0]
-            angle_deg = nxt - stops[k][0]
-            dw = float(d[(k + 1) % m])
-            steps.append(Step("outer", angle_deg * DEG, dw, label=f"{nxt:g}"))
-            rows.append(
-                {
-                    "gimbal": "outer",
-                    "angle": f"{_fmt(angle_deg)} deg",
-                    "dwell": f"{_fmt(dw)} s",
-                    "label": f"{nxt:g}",
-                }
-            )
-        scheme = TableScheme(
-            "custom", tuple(steps), rate, float(d[0]), start_label="0", mounting=self._mounting()
-        )
-        table = {
-            "name": "custom",
-            "rate": f"{_fmt(rate_deg)} deg/s",
-            "stop": f"{_fmt(d[0])} s",
-            "steps": rows,
-        }
-        order = " ".join(f"{p:g}" for p, _ in stops)
+            violation["stop_range"] = violation.get("stop_range", 0.0) + excess / lo
+        return d
+
+    def decode(self, x) -> Decoded:
+        p, d, rate_deg, violation = self._cycle(x)
+        if len(p) == 0:
+            return Decoded(None, {}, violation, "no turn")
+        scheme, table = _table_of([(p, d)], rate_deg, self._mounting())
+        order = " ".join(f"{q:g}" for q in p)
         summary = (
             f"positions {order} deg, stops {' '.join(f'{v:.1f}' for v in d)} s, {rate_deg:g} deg/s"
+        )
+        return Decoded(scheme, table, violation, summary)
+
+
+def _table_of(
+    cycles: list[tuple[np.ndarray, np.ndarray]], rate_deg: float, mounting
+) -> tuple[TableScheme, dict[str, Any]]:
+    """A single-axis table flying ``cycles`` (positions deg, stop times s) in turn, then
+    again from the first: each turn goes straight to the next position; every cycle
+    starts at position 0 (its first stop), so cycles join without an extra turn."""
+    seq = [(float(q), float(w)) for p, d in cycles for q, w in zip(p, d, strict=True)]
+    m = len(seq)
+    steps, rows = [], []
+    for k in range(m):
+        nxt, dw = seq[(k + 1) % m]
+        angle_deg = nxt - seq[k][0]
+        steps.append(Step("outer", angle_deg * DEG, dw, label=f"{nxt:g}"))
+        rows.append(
+            {
+                "gimbal": "outer",
+                "angle": f"{_fmt(angle_deg)} deg",
+                "dwell": f"{_fmt(dw)} s",
+                "label": f"{nxt:g}",
+            }
+        )
+    scheme = TableScheme(
+        "custom", tuple(steps), rate_deg * DEG, seq[0][1], start_label="0", mounting=mounting
+    )
+    table = {
+        "name": "custom",
+        "rate": f"{_fmt(rate_deg)} deg/s",
+        "stop": f"{_fmt(seq[0][1])} s",
+        "steps": rows,
+    }
+    return scheme, table
+
+
+#: Fraction of the cycles of a two-length sequence that are the stretched one: 1 / phi^2,
+#: the most irrational slope (its Sturmian word is the Fibonacci word).
+GOLDEN_SLOPE = (3.0 - math.sqrt(5.0)) / 2.0
+
+
+def golden_word(count: int) -> list[int]:
+    """The first ``count`` letters (0 or 1) of the Sturmian word of slope 1/phi^2.
+
+    Letter ``c`` is ``floor((c + 1) s) - floor(c s)`` (``s`` = :data:`GOLDEN_SLOPE`):
+    a 1 in a fraction ``s`` of the places, never periodic, every block of letters
+    recurring at irregular distances (the Fibonacci word, 0 and 1 swapped).
+    """
+    return [math.floor((c + 1) * GOLDEN_SLOPE) - math.floor(c * GOLDEN_SLOPE) for c in range(count)]
+
+
+class SingleAxisGolden(SingleAxis):
+    """Two balanced cycles of the same positions flown in the golden (Fibonacci) order.
+
+    Why: a repeated cycle of length ``L`` meets every swing whose period is ``L / k``
+    at the same phase cycle after cycle, and the swing-induced errors (the
+    misalignments of the horizontal gyros to the yaw rate above all) add up cycle
+    after cycle. Here cycle A (the designed stops) and cycle B (the same positions,
+    stops ``stretch`` times longer, balanced again) follow the Sturmian word of
+    slope 1/phi^2: the cycle starts are ``c L_A + n_B(c) (L_B - L_A)``; a swing meets
+    every cycle at the same phase only if its period divides both ``L_A`` and ``L_B``,
+    which the stretch keeps away from the long periods that matter. The variables are
+    the single-axis ones plus ``stretch``; the table lists every cycle of the run
+    (``horizon`` s) and is still an open-loop table. A B cycle stretched by less than
+    half the asked ``stretch - 1`` (stops at the top of the range cannot grow) breaks
+    the family's rules.
+    """
+
+    name = "single-axis-golden"
+
+    def variables(self) -> list[Variable]:
+        lo, hi = self.settings["stretch_range"]
+        return super().variables() + [Variable("stretch", lo, hi, "", 3)]
+
+    def start(self) -> list[float]:
+        lo, hi = self.settings["stretch_range"]
+        return super().start() + [min(max(1.0 + GOLDEN_SLOPE, lo), hi)]
+
+    def decode(self, x) -> Decoded:
+        x = list(x)
+        stretch = float(x[-1])
+        p, d, rate_deg, violation = self._cycle(x[:-1])
+        if len(p) == 0:
+            return Decoded(None, {}, violation, "no turn")
+        d_b = self._balanced(p, d * stretch, rate_deg, violation)
+        # Stops at the top of the range cannot stretch, and balancing may pull B back onto
+        # A: a B cycle less than half as stretched as asked is the repeated cycle again.
+        gain = float(np.sum(d_b) / np.sum(d)) - 1.0
+        if gain < 0.5 * (stretch - 1.0):
+            violation["stretch"] = 1.0 - gain / (0.5 * (stretch - 1.0))
+        turn = float(np.sum(np.abs(np.diff(np.append(p, p[0]))))) / rate_deg
+        shortest = min(float(np.sum(d)), float(np.sum(d_b))) + turn
+        count = int(math.ceil(self.settings["horizon"] / shortest)) + 1
+        word = golden_word(count)
+        scheme, table = _table_of(
+            [(p, d_b) if w else (p, d) for w in word], rate_deg, self._mounting()
+        )
+        order = " ".join(f"{q:g}" for q in p)
+        summary = (
+            f"golden: positions {order} deg, stops {' '.join(f'{v:.1f}' for v in d)} s "
+            f"and x{stretch:g} ({' '.join(f'{v:.1f}' for v in d_b)} s), {rate_deg:g} deg/s"
         )
         return Decoded(scheme, table, violation, summary)
 
@@ -504,7 +597,7 @@ class DualAxis(Family):
         return Decoded(scheme, table, violation, summary)
 
 
-_CLASSES = {c.name: c for c in (SingleAxis, Nulling, Flexible, DualAxis)}
+_CLASSES = {c.name: c for c in (SingleAxis, SingleAxisGolden, Nulling, Flexible, DualAxis)}
 
 
 def family_from_spec(spec: dict[str, Any]) -> Family:
@@ -550,13 +643,19 @@ def build_family(scen: Scenario, name: str | None = None) -> Family:
         "mounting": None if mounting is None else np.asarray(mounting).tolist(),
     }
     table_range = scen.value("design.table_range") / DEG
-    if name in ("single-axis", "dual-axis"):
+    if name in ("single-axis", "single-axis-golden", "dual-axis"):
         n = scen.value("design.stops")
         if not 2 <= n <= 64:
             raise InputError("design.stops", f"must be 2 to 64, got {n}", "e.g. 8")
         settings["stops"] = n
         settings["table_range_deg"] = round(table_range, 9)
-    if name == "single-axis":
+    if name == "single-axis-golden":
+        sr = _range_setting(scen, "design.stretch_range", (1.2, 2.0))
+        if sr[0] <= 1.0:
+            raise InputError("design.stretch_range", "must be > 1 (B longer than A)", "1.2, 2")
+        settings["stretch_range"] = [round(sr[0], 3), round(sr[1], 3)]
+        settings["horizon"] = float(scen.duration)
+    if name in ("single-axis", "single-axis-golden"):
         step = round(scen.value("design.angle_step") / DEG, 9)
         if not 0 < step <= table_range:
             raise InputError(

@@ -8,6 +8,10 @@ scenario declares the set (``design.motions``):
 
 * ``grid``: every combination of ``periods`` x ``amplitudes`` x ``headings`` of a yaw
   swing, at the scenario's pitch and roll (``headings`` absent: the scenario's);
+* ``grid+draws``: the grid, then ``draws`` training draws as ``random`` (the grid
+  keeps the figure a design is judged on; the draws vary what the grid holds fixed,
+  heading above all, and fill the periods between the grid's, where an open-loop
+  cycle can resonate unseen);
 * ``random``: ``draws`` seeded draws of a yaw swing, period log-uniform in
   ``period_range``, peak yaw rate uniform in ``amplitude_range``, heading, pitch and
   roll uniform in their ranges (a range absent: the scenario's value);
@@ -17,8 +21,9 @@ scenario declares the set (``design.motions``):
   the scenario's pitch and roll.
 
 The held-out motions (``design.held_out`` of them) are seeded draws from the same
-ranges as ``random`` but from another stream of the seed, so they never coincide
-with a design set: the optimizer never sees them.
+ranges as ``random`` but from another stream of the seed (:data:`HELD_OUT_STREAM`;
+the training draws use :data:`DESIGN_STREAM`), so they never coincide with a design
+set: the optimizer never sees them.
 """
 
 from __future__ import annotations
@@ -263,11 +268,20 @@ def design_motions(scen: Scenario) -> list[MotionCase]:
         if not files:
             raise InputError("design.files", "no heading-history files", "list CSV files")
         return [_history_case(f, scen.base_dir, m.pitch, m.roll) for f in files]
-    if kind == "random":
+    if kind in ("random", "grid+draws"):
         n = scen.value("design.draws")
         if n < 1:
             raise InputError("design.draws", f"must be >= 1, got {n}", "e.g. 36")
-        return random_motions(scen, n, DESIGN_STREAM)
+        draws = random_motions(scen, n, DESIGN_STREAM)
+        if kind == "random":
+            return draws
+        return _grid(scen) + draws
+    return _grid(scen)
+
+
+def _grid(scen: Scenario) -> list[MotionCase]:
+    """The ``grid`` motions (periods x amplitudes x headings)."""
+    m = scen.motion
     periods = scen.value("design.periods")
     amplitudes = scen.value("design.amplitudes")
     headings = scen.value("design.headings") or (m.heading,)

@@ -176,19 +176,49 @@ class ErrorBudget:
         ]
         self.source_set = source_set(self.model, self.sources)
 
-    def rms_nmi(self, table: TableSchedule, motion, horizon: Horizon) -> float:
-        """Maximum over the run of the RMS horizontal error over unknown signs, nmi."""
+    def _horizontal(self, table: TableSchedule, motion, horizon: Horizon):
+        """Output times (s) and per-source horizontal position errors (Mc, N, 2), m."""
         from inserr.model.fast_propagation import constant_error_response
         from inserr.model.psi_model import DR
         from inserr.schemes.composition import ScheduleHistory
 
-        if not self.sources:
-            return 0.0
         hist = ScheduleHistory(table, motion, horizon.duration)
         t = output_grid(horizon.duration, horizon.step)
         resp = constant_error_response(self.model, hist, self.source_set, t, t)
-        v = np.moveaxis(resp.coarse[:, DR, :][:, :2, :], 1, 2)  # (Mc, N, 2), E and N
+        return t, np.moveaxis(resp.coarse[:, DR, :][:, :2, :], 1, 2)  # E and N
+
+    def rms_nmi(self, table: TableSchedule, motion, horizon: Horizon) -> float:
+        """Maximum over the run of the RMS horizontal error over unknown signs, nmi."""
+        if not self.sources:
+            return 0.0
+        _, v = self._horizontal(table, motion, horizon)
         return float(rms_norm(v).max() / NMI)
+
+    def breakdown(
+        self, table: TableSchedule, motion, horizon: Horizon
+    ) -> tuple[float, float, list[tuple[str, float]]]:
+        """Where the RMS peaks and what makes it: the per-source budget at that time.
+
+        Returns
+        -------
+        time : float, s
+            Output time of the largest RMS.
+        rms : float, nmi
+            The RMS there (:meth:`rms_nmi`).
+        sources : list of (name, nmi)
+            Each source's horizontal error magnitude at that time, largest first (their
+            root sum of squares is the RMS: the signs are unknown and independent).
+        """
+        t, v = self._horizontal(table, motion, horizon)
+        total = rms_norm(v)
+        k = int(np.argmax(total))
+        mag = np.linalg.norm(v[k], axis=-1) / NMI
+        order = np.argsort(-mag, kind="stable")
+        return (
+            float(t[k]),
+            float(total[k] / NMI),
+            [(self.sources[i].name, float(mag[i])) for i in order],
+        )
 
 
 def source_names(scen: Scenario) -> list[str]:

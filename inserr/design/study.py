@@ -54,6 +54,8 @@ from inserr.scenario.schema import Scenario
 MARKER = "design.json"
 #: The chosen schedule as a scenario file.
 CHOSEN_TOML = "chosen_scheme.toml"
+#: Steps of the chosen table listed in the report (a golden-order table lists every cycle).
+STEPS_SHOWN = 24
 
 
 class DesignFailed(RuntimeError):
@@ -99,6 +101,8 @@ class Settings:
     population: int
     verify: int
     seed: int
+    #: ``grid+draws``: how many of ``motions`` (the first) are the grid, reported apart.
+    grid: int | None = None
 
     def describe(self) -> dict[str, Any]:
         return {
@@ -106,6 +110,7 @@ class Settings:
             "variables": [v.__dict__ for v in self.family.variables()],
             "motions": [m.label for m in self.motions],
             "held_out": [m.label for m in self.held_out],
+            "grid_motions": self.grid,
             "full_horizon": self.full.as_dict(),
             "search_horizon": self.screen.as_dict(),
             "limits": self.limits.as_dict(),
@@ -179,7 +184,12 @@ def design_settings(
     verify = scen.value("design.verify")
     if verify < 1:
         raise InputError("design.verify", f"must be >= 1, got {verify}", "e.g. 8")
-    return Settings(fam, motions, held, full, screen, limits, budget, population, verify, scen.seed)
+    grid = None
+    if scen.value("design.motions") == "grid+draws":
+        grid = len(motions) - scen.value("design.draws")
+    return Settings(
+        fam, motions, held, full, screen, limits, budget, population, verify, scen.seed, grid
+    )
 
 
 # --- results ----------------------------------------------------------------------------
@@ -202,7 +212,11 @@ class Scored:
     def worst(self) -> float:
         return max(self.values) if self.values else math.nan
 
-    def summary(self, motions: list[MotionCase], held: list[MotionCase]) -> dict[str, Any]:
+    def summary(
+        self, motions: list[MotionCase], held: list[MotionCase], grid: int | None = None
+    ) -> dict[str, Any]:
+        """Figures of the schedule; ``grid``: the first ``grid`` motions are also reported
+        apart (``grid_*``: the grid of a ``grid+draws`` set)."""
         v = self.values
         out = {
             "label": self.label,
@@ -217,6 +231,10 @@ class Scored:
             "violation": self.outcome.violation,
             "meets_constraints": not self.outcome.violation,
         }
+        if grid and len(v) == len(motions):
+            out["grid_worst_nmi"] = max(v[:grid])
+            out["grid_mean_nmi"] = float(np.mean(v[:grid]))
+            out["grid_worst_motion"] = motions[int(np.argmax(v[:grid]))].label
         if self.held is not None and self.held.rms:
             hv = [self.held.rms[i] for i in sorted(self.held.rms)]
             out["held_out_worst_nmi"] = max(hv)
@@ -466,10 +484,10 @@ def _results(scen: Scenario, o: DesignOutcome) -> dict[str, Any]:
             "candidates": len(o.search.evaluated),
             "generations": [g.__dict__ for g in o.search.generations],
         },
-        "verified": [s.summary(ms, hs) for s in o.verified],
-        "front": [s.summary(ms, hs) for s in o.front],
-        "chosen": None if o.chosen is None else o.chosen.summary(ms, hs),
-        "catalogue": [s.summary(ms, hs) for s in o.catalogue],
+        "verified": [s.summary(ms, hs, st.grid) for s in o.verified],
+        "front": [s.summary(ms, hs, st.grid) for s in o.front],
+        "chosen": None if o.chosen is None else o.chosen.summary(ms, hs, st.grid),
+        "catalogue": [s.summary(ms, hs, st.grid) for s in o.catalogue],
     }
     return res
 
@@ -554,7 +572,15 @@ def build_report(scen: Scenario, o: DesignOutcome, title: str | None = None) -> 
         ["item", "value"],
         [list(r) for r in describe(scen)]
         + [
-            ["motion set", _fmt_motion_set(st.motions)],
+            [
+                "motion set",
+                _fmt_motion_set(st.motions)
+                if not st.grid
+                else f"the grid ({_fmt_motion_set(st.motions[: st.grid])}) and "
+                f"{len(st.motions) - st.grid} training draws "
+                f"({_fmt_motion_set(st.motions[st.grid :])}, another seed stream than the "
+                "held-out motions)",
+            ],
             ["held-out motions", _fmt_motion_set(st.held_out)],
             ["evaluations run on", o.engine],
             [
@@ -580,10 +606,16 @@ def build_report(scen: Scenario, o: DesignOutcome, title: str | None = None) -> 
         )
         steps = o.chosen.table.get("steps")
         if steps:
+            shown = steps[:STEPS_SHOWN]
             rep.table(
                 ["step", "gimbal", "turn", "then stop"],
-                [[i + 1, s["gimbal"], s["angle"], s["dwell"]] for i, s in enumerate(steps)],
+                [[i + 1, s["gimbal"], s["angle"], s["dwell"]] for i, s in enumerate(shown)],
             )
+            if len(steps) > len(shown):
+                rep.paragraph(
+                    f"The first {len(shown)} of the table's {len(steps)} steps (every step "
+                    f"in `{CHOSEN_TOML}`)."
+                )
             rep.paragraph(
                 f"The run opens with a stop of {o.chosen.table['stop']} at 0 deg; the table "
                 f"turns at {o.chosen.table['rate']}."
@@ -597,12 +629,21 @@ def build_report(scen: Scenario, o: DesignOutcome, title: str | None = None) -> 
         (s for s in o.catalogue if s.outcome.feasible), key=lambda s: s.worst, default=None
     )
     rep.heading("Compared with the catalogue, on the motion set")
+    grid = st.grid
+    if grid:
+        rep.paragraph(
+            f"The motion set is the grid ({grid} motions) and {len(ms) - grid} training "
+            "draws; *grid worst* is the worst over the grid alone, *worst RMS* over the "
+            "whole set the search minimised."
+        )
     rep.table(
-        ["scheme", "worst RMS (nmi)", "mean RMS (nmi)", "worst at", "starts/h", "turning (%)",
-         "range (deg)", "meets constraints"],
+        ["scheme", *(["grid worst (nmi)"] if grid else []), "worst RMS (nmi)",
+         "mean RMS (nmi)", "worst at", "starts/h", "turning (%)", "range (deg)",
+         "meets constraints"],
         [
             [
                 ("designed: " if s is o.chosen else "") + s.label[:60],
+                *([max(s.values[:grid])] if grid else []),
                 s.worst,
                 float(np.mean(s.values)),
                 ms[int(np.argmax(s.values))].label,

@@ -218,13 +218,16 @@ SCHEMA: dict[str, dict[str, Key]] = {
             "time", "list", None, "nulling: lengthening allowed (absent: 0 s, 2 scheme.stop)"
         ),
         "delta_range": _K("float-list", None, [0.001, 0.1], "flexible: stop threshold tried"),
+        "stretch_range": _K(
+            "float-list", None, [1.2, 2.0], "single-axis-golden: cycle B's stops / cycle A's"
+        ),
         "motions": _K("str", None, "grid", "the motion set designed for"),
         "periods": _K(
             "time", "list", "20,30,45,60,90,120,165,240,330,480,660,1200 s", "grid: swing periods"
         ),
         "amplitudes": _K("angular_rate", "list", "1,3,6 deg/s", "grid: peak yaw rates"),
         "headings": _K("angle", "list", [], "grid: vehicle headings (absent: motion.heading)"),
-        "draws": _K("int", None, 36, "random: motions drawn"),
+        "draws": _K("int", None, 36, "random, grid+draws: motions drawn (training stream)"),
         "period_range": _K("time", "list", "20,1200 s", "random, held-out: swing period"),
         "amplitude_range": _K(
             "angular_rate", "list", "1,6 deg/s", "random, held-out: peak yaw rate"
@@ -348,8 +351,8 @@ CHOICES: dict[str, tuple[str, ...]] = {
     "output.vertical": ("clamped", "free"),
     "output.engine": ("fast", "exact"),
     "scheme.variant": ("threshold", "crossing"),
-    "design.family": ("single-axis", "nulling", "flexible", "dual-axis"),
-    "design.motions": ("grid", "random", "scenario", "files"),
+    "design.family": ("single-axis", "single-axis-golden", "nulling", "flexible", "dual-axis"),
+    "design.motions": ("grid", "grid+draws", "random", "scenario", "files"),
     "scheme.start": SCHEME_STARTS,
     "motion.heading_convention": HEADING_CONVENTIONS,
     "observability.model": ("auto", "alignment10", "full"),
