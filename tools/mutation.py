@@ -63,6 +63,7 @@ COPY = ("inserr", "tests", "docs", "pyproject.toml", "mkdocs.yml", "README.md")
 #: test command. Ordered fast and targeted first, so that ``-x`` ends a killed run early.
 PHYSICS_TESTS = (
     "tests/test_unknown_signs.py",
+    "tests/test_paper_comparison.py",
     "tests/test_frames.py",
     "tests/test_fast_propagation.py",
     "tests/test_noise_levels.py",
