@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from design_base import TINY_DESIGN, comparable, make_scenario, p0_tiny, run_interrupted
 
 from inserr.cli.main import main
 from inserr.core.units import DEG, HOUR, NMI
@@ -25,45 +26,14 @@ from inserr.design.objective import ErrorBudget, Horizon, Limits, schedule_metri
 from inserr.scenario.schema import load_scenario, scenario_from_dict
 
 # P0's IMU budget and tilted swinging vehicle, shortened: the design problem in small.
-BASE = {
-    "scenario": {"name": "tiny design", "duration": "2 h", "seed": 3},
-    "site": {"latitude": "34.246 deg"},
-    "imu": {
-        "gyro_bias": "0.003 deg/h",
-        "accel_bias": "30 ug",
-        "gyro_scale_factor": "10 ppm",
-        "gyro_misalignment": "10 arcsec",
-        "accel_misalignment": "10 arcsec",
-    },
-    "initial": {"attitude": "10,10,60 arcsec"},
-    "motion": {
-        "type": "yaw-swing",
-        "heading": "15 deg",
-        "pitch": "1 deg",
-        "roll": "-2 deg",
-        "amplitude": "6 deg/s",
-        "period": "120 s",
-    },
-    "scheme": {"name": "two-position", "rate": "6 deg/s", "stop": "300 s"},
-    "output": {"covariance_step": "60 s"},
-    "design": {
-        "periods": "45, 330 s",
-        "amplitudes": "6 deg/s",
-        "stops": 4,
-        "budget": 18,
-        "population": 6,
-        "verify": 3,
-        "held_out": 2,
-    },
-}
+BASE = p0_tiny(
+    {"name": "tiny design", "duration": "2 h", "seed": 3},
+    {**TINY_DESIGN, "verify": 3},
+)
 
 
 def scenario(duration: str | None = None, **design):
-    data = json.loads(json.dumps(BASE))
-    data["design"].update(design)
-    if duration:
-        data["scenario"]["duration"] = duration
-    return scenario_from_dict(data)
+    return make_scenario(BASE, duration, **design)
 
 
 def write_scenario(path: Path, **design) -> Path:
@@ -77,17 +47,6 @@ def write_scenario(path: Path, **design) -> Path:
             lines.append(f"{k} = {json.dumps(v)}")
     path.write_text("\n".join(lines) + "\n")
     return path
-
-
-def comparable(results: dict) -> dict:
-    """A design's results without what depends on the run (times, cache counts, engine)."""
-    r = json.loads(json.dumps(results))
-    for k in ("seconds", "motion_evaluations_computed", "evaluations_in_cache_at_start", "engine"):
-        r.pop(k)
-    for g in r["search"]["generations"]:
-        g.pop("seconds")
-        g.pop("motion_evaluations")
-    return r
 
 
 @pytest.fixture(scope="module")
@@ -267,19 +226,7 @@ def _full_call(call):
 def test_interrupted_and_resumed_gives_the_same_front(reference, tmp_path, monkeypatch):
     """Stop the design after some evaluations (as Ctrl-C would), rerun: same results."""
     out = tmp_path / "out"
-    put = EvaluationCache.put
-    count = {"n": 0}
-
-    def interrupting(self, key, record):
-        put(self, key, record)
-        count["n"] += 1
-        if count["n"] == 25:
-            raise KeyboardInterrupt
-
-    monkeypatch.setattr(EvaluationCache, "put", interrupting)
-    with pytest.raises(KeyboardInterrupt):
-        study.run_design(scenario(), out_dir=out, scheduler="sync")
-    monkeypatch.setattr(EvaluationCache, "put", put)
+    run_interrupted(monkeypatch, scenario(), out, after=25)
     assert len((out / "evaluations.jsonl").read_text().splitlines()) == 25
     assert not (out / "results.json").exists()  # no report of an unfinished design
     resumed = study.run_design(scenario(), out_dir=out, scheduler="sync")

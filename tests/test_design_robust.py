@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import pytest
+from design_base import TINY_DESIGN, comparable, make_scenario, p0_tiny, run_interrupted
 
 from inserr.core.units import DEG, NMI
 from inserr.design import study
@@ -28,61 +29,22 @@ from inserr.design.search import Evaluator, Request, family_candidate
 from inserr.scenario.schema import scenario_from_dict
 
 # P0's IMU budget and tilted swinging vehicle, shortened (as tests/test_design.py).
-BASE = {
-    "scenario": {"name": "tiny robust design", "duration": "2 h", "seed": 5},
-    "site": {"latitude": "34.246 deg"},
-    "imu": {
-        "gyro_bias": "0.003 deg/h",
-        "accel_bias": "30 ug",
-        "gyro_scale_factor": "10 ppm",
-        "gyro_misalignment": "10 arcsec",
-        "accel_misalignment": "10 arcsec",
-    },
-    "initial": {"attitude": "10,10,60 arcsec"},
-    "motion": {
-        "type": "yaw-swing",
-        "heading": "15 deg",
-        "pitch": "1 deg",
-        "roll": "-2 deg",
-        "amplitude": "6 deg/s",
-        "period": "120 s",
-    },
-    "scheme": {"name": "two-position", "rate": "6 deg/s", "stop": "300 s"},
-    "output": {"covariance_step": "60 s"},
-    "design": {
+BASE = p0_tiny(
+    {"name": "tiny robust design", "duration": "2 h", "seed": 5},
+    {
         "motions": "grid+draws",
-        "periods": "45, 330 s",
-        "amplitudes": "6 deg/s",
+        **TINY_DESIGN,
         "draws": 2,
         "period_range": "20, 1200 s",
         "amplitude_range": "1, 6 deg/s",
         "heading_range": "0, 360 deg",
-        "stops": 4,
-        "budget": 18,
-        "population": 6,
         "verify": 2,
-        "held_out": 2,
     },
-}
+)
 
 
 def scenario(duration: str | None = None, **design):
-    data = json.loads(json.dumps(BASE))
-    data["design"].update(design)
-    if duration:
-        data["scenario"]["duration"] = duration
-    return scenario_from_dict(data)
-
-
-def comparable(results: dict) -> dict:
-    """A design's results without what depends on the run (times, cache counts, engine)."""
-    r = json.loads(json.dumps(results))
-    for k in ("seconds", "motion_evaluations_computed", "evaluations_in_cache_at_start", "engine"):
-        r.pop(k)
-    for g in r["search"]["generations"]:
-        g.pop("seconds")
-        g.pop("motion_evaluations")
-    return r
+    return make_scenario(BASE, duration, **design)
 
 
 # --- the motion sets ----------------------------------------------------------------------
@@ -244,19 +206,7 @@ def test_golden_design_is_deterministic_and_resumes(tmp_path, monkeypatch):
     again = study.run_design(scen, out_dir=None, scheduler="sync")
     assert comparable(again.results) == comparable(ref.results)
     out = tmp_path / "out"
-    put = EvaluationCache.put
-    count = {"n": 0}
-
-    def interrupting(self, key, record):
-        put(self, key, record)
-        count["n"] += 1
-        if count["n"] == 30:
-            raise KeyboardInterrupt
-
-    monkeypatch.setattr(EvaluationCache, "put", interrupting)
-    with pytest.raises(KeyboardInterrupt):
-        study.run_design(scen, out_dir=out, scheduler="sync")
-    monkeypatch.setattr(EvaluationCache, "put", put)
+    run_interrupted(monkeypatch, scen, out, after=30)
     assert not (out / "results.json").exists()
     resumed = study.run_design(scen, out_dir=out, scheduler="sync")
     assert resumed.cached > 0 and resumed.computed > 0
