@@ -106,3 +106,40 @@ def test_p0_against_the_paper_table_quotes_the_paper_and_the_results():
                 for key in ("all-positive", "worst"):
                     assert d["lowest_bound"] - 1e-9 <= d[key] <= d["highest"] + 1e-9
                 assert d["worst"] == pytest.approx(d["highest"], rel=1e-9)
+
+
+#: docs/design.md's P0 figures: row label -> (study, "chosen" or a catalogue label, key).
+_S, _N, _ST = "p0_vehicle", "p0_vehicle_nulling", "static_base"
+_C, _NU, _TP = "chosen", "nulling-two-position", "two-position"
+_DA, _NR = "designed single-axis cycle: ", "nulling rule (catalogue): "
+DESIGN_FIGURES = {
+    _DA + "worst on P0's 36-case grid": (_S, _C, "grid_worst_nmi"),
+    _DA + "worst on the whole training set (grid and 24 draws)": (_S, _C, "worst_nmi"),
+    _DA + "worst on the 36 held-out swings": (_S, _C, "held_out_worst_nmi"),
+    _DA + "motor starts per hour": (_S, _C, "starts_per_hour"),
+    _NR + "worst on the grid": (_S, _NU, "grid_worst_nmi"),
+    _NR + "worst on the whole training set": (_S, _NU, "worst_nmi"),
+    _NR + "worst on the held-out swings": (_S, _NU, "held_out_worst_nmi"),
+    "traditional two-position cycle: worst on the grid": (_S, _TP, "grid_worst_nmi"),
+    "traditional two-position cycle: motor starts per hour": (_S, _TP, "starts_per_hour"),
+    "designed nulling parameters: worst on the grid": (_N, _C, "grid_worst_nmi"),
+    "designed nulling parameters: worst on the held-out swings": (_N, _C, "held_out_worst_nmi"),
+    "static base: designed cycle": (_ST, _C, "worst_nmi"),
+    "static base: nulling rule": (_ST, _NU, "worst_nmi"),
+}
+
+
+def test_design_doc_quotes_the_design_study_results():
+    # The figures of docs/design.md section 5 are hand-placed in prose; each must be the
+    # study's results.json value to the digits printed (4 significant digits, as REPORT.md).
+    text = (ROOT / "docs" / "design.md").read_text()
+    rows = _table_after(text, "<!-- inserr:design-p0-figures -->")
+    results = json.loads((ROOT / "analyses" / "design_p0" / "results" / "results.json").read_text())
+    quoted = {label: value for label, value in rows}
+    assert set(quoted) == set(DESIGN_FIGURES)
+    for label, (study, who, key) in DESIGN_FIGURES.items():
+        r = results[study]
+        entry = (
+            r["chosen"] if who == "chosen" else next(e for e in r["catalogue"] if e["label"] == who)
+        )
+        assert quoted[label] == f"{entry[key]:.4g}", label
