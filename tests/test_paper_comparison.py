@@ -218,3 +218,100 @@ def test_ratio_verdict_counts_by_hand():
     assert (v["better_2pct"], v["level_2pct"], v["worse_2pct"]) == (1, 1, 1)
     assert v["largest_ratio"]["ratio"] == pytest.approx(1.1, rel=1e-12)
     assert v["median_ratio"] == pytest.approx(1.01, rel=1e-12)
+
+
+def _patterns(n: int) -> np.ndarray:
+    """Every sign pattern of n sources with the first sign +1, (2^(n-1), n)."""
+    rest = np.array(list(itertools.product((1.0, -1.0), repeat=n - 1))).reshape(-1, n - 1)
+    return np.hstack([np.ones((len(rest), 1)), rest])
+
+
+def _maxima(v: np.ndarray, pats: np.ndarray) -> np.ndarray:
+    """M(s) of each pattern (rows of pats), vectorized brute force."""
+    sums = np.einsum("tnd,pn->ptd", v, pats)
+    return np.max(np.hypot(sums[..., 0], sums[..., 1]), axis=1)
+
+
+def test_sign_pattern_range_of_no_source_and_of_one_source():
+    r = sign_pattern_range(np.zeros((4, 0, 2)))
+    assert (r.highest, r.lowest, r.lowest_bound) == (0.0, 0.0, 0.0)
+    assert r.highest_signs.shape == r.lowest_signs.shape == (0,)
+    # One source: both signs give the same maximum, its largest length (3-4-5 triangle).
+    v = np.zeros((3, 1, 2))
+    v[1, 0] = (3.0, 4.0)
+    r = sign_pattern_range(v)
+    assert (r.highest, r.lowest, r.lowest_bound) == pytest.approx((5.0, 5.0, 5.0), abs=1e-12)
+    assert r.highest_signs.shape == r.lowest_signs.shape == (1,)
+
+
+@pytest.mark.parametrize("seed", [9, 10])
+def test_sign_pattern_range_bound_is_the_documented_bracket(seed):
+    # The docstring's bound, rebuilt independently: the `exhaustive` largest sources
+    # (by max_t |v_i|) searched over every pattern at `times` evenly spaced times (last
+    # included), the rest bounded by their lengths; then no larger than the value found.
+    v = _vectors(seed, t=40, n=12)
+    r = sign_pattern_range(v, exhaustive=9, times=15, starts=3)
+    size = np.max(np.hypot(v[..., 0], v[..., 1]), axis=0)
+    big = np.argsort(-size)[:9]
+    small = np.setdiff1d(np.arange(12), big)
+    sel = np.unique(np.round(np.linspace(0, 39, 15)).astype(int))
+    slack = np.hypot(v[sel][:, small, 0], v[sel][:, small, 1]).sum(axis=1)
+    sums = np.einsum("tnd,pn->ptd", v[sel][:, big], _patterns(9))
+    bound = np.max(np.hypot(sums[..., 0], sums[..., 1]) - slack, axis=1).min()
+    assert r.lowest_bound == pytest.approx(min(max(bound, 0.0), r.lowest), rel=1e-12)
+    # And it is a bracket of the true minimum (brute force over all 2^11 patterns).
+    true = _maxima(v, _patterns(12))
+    assert r.lowest_bound <= true.min() * (1 + 1e-12) <= r.lowest * (1 + 2e-12)
+    assert r.highest == pytest.approx(true.max(), rel=1e-12)
+
+
+@pytest.mark.parametrize("seed, y_scale", [(11, 1.0), (12, 1.0), (11, 0.05)])
+def test_descent_ends_where_no_single_flip_lowers_the_maximum(seed, y_scale):
+    # `lowest` comes from single-flip descent: at its pattern no flip lowers M (the
+    # documented stopping rule), and M of the pattern is the value returned. One source
+    # searched exhaustively, so the descent starts far from a minimum; errors mostly
+    # along one axis (y_scale) as well as in the plane.
+    v = _vectors(seed, n=10) * np.array([1.0, y_scale])
+    r = sign_pattern_range(v, exhaustive=1, times=5, starts=1)
+    s = r.lowest_signs
+    assert r.lowest == pytest.approx(pattern_maximum(v, s), rel=1e-12)
+    flips = np.where(np.eye(10, dtype=bool), -s, s)  # row i: s with sign i flipped
+    assert np.all(_maxima(v, flips) >= r.lowest * (1 - 1e-12))
+
+
+@pytest.mark.parametrize("seed", [13, 14])
+def test_closest_pattern_many_sources_is_a_local_optimum_and_exact_when_few(seed):
+    v = _vectors(seed, n=14)
+    pats = _patterns(14)
+    m = _maxima(v, pats)
+    for target in np.quantile(m, [0.1, 0.5, 0.9]):
+        # 14 sources: all 8192 patterns are tried (in blocks of 4096): the brute-force
+        # answer, to round-off.
+        signs, value = closest_pattern(v, float(target))
+        assert abs(value - target) == pytest.approx(np.min(np.abs(m - target)), abs=1e-12)
+        assert value == pytest.approx(pattern_maximum(v, signs), rel=1e-12)
+        # The walk and descent of many sources (forced): no single flip gets closer.
+        signs, value = closest_pattern(v, float(target), exhaustive=0, walks=4)
+        flips = np.where(np.eye(14, dtype=bool), -signs, signs)
+        assert np.all(np.abs(_maxima(v, flips) - target) >= abs(value - target) - 1e-12)
+
+
+def test_figure_reach_reports_the_range_and_its_closest_pattern():
+    v = _vectors(15)
+    m = _maxima(v, _patterns(7))
+    target = float(np.quantile(m, 0.7))
+    out = figure_reach(v, target)
+    r = sign_pattern_range(v)
+    assert (out["lowest_bound"], out["lowest"], out["highest"]) == (
+        r.lowest_bound,
+        r.lowest,
+        r.highest,
+    )
+    assert out["closest"] == pytest.approx(pattern_maximum(v, out["closest_signs"]), rel=1e-12)
+    assert out["closest"] == pytest.approx(m[np.argmin(np.abs(m - target))], rel=1e-12)
+    # Inside the range, missed by more than the tolerance: a tolerance of 0 and a target
+    # between two neighbouring values that no pattern takes.
+    vals = np.unique(np.round(m, 12))
+    gap = int(np.argmax(np.diff(vals)))
+    mid = 0.5 * (vals[gap] + vals[gap + 1])
+    assert figure_reach(v, float(mid), tol=0.0)["verdict"] == "not found"
