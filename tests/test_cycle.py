@@ -14,7 +14,7 @@ from inserr.schemes.catalogue import build_scheme
 from inserr.schemes.composition import build_timeline
 from inserr.schemes.cycle_integrals import cycle_integrals
 from inserr.schemes.open_loop import PSINS_SIXTEEN, Step, TableScheme
-from inserr.schemes.vehicle_motion import Motion
+from inserr.schemes.vehicle_motion import Motion, Turn
 
 RATE = 6 * DEG
 PERIODIC = [
@@ -419,3 +419,43 @@ def test_cycle_cli_bad_inputs_give_one_clear_error(tmp_path, capsys):
         assert main(argv) == 2, argv
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and field in err[0] and "error" in err[0], (argv, err)
+
+
+def test_closed_form_with_mounting_slow_turn_quarter_inner_turns_and_short_stops():
+    # A custom dual-axis cycle exercising what the catalogue does not: a tilted IMU
+    # mounting, a turn with its own (slower) rotation time, quarter turns of the inner
+    # gimbal (where +-90 deg differ, unlike +-180), a 0.5 s stop between two turns the
+    # same way and a turn straight into the next. Truth: the numerical integral of the
+    # planned schedule, and the motor starts counted by hand (a start after every stop,
+    # however short, and at every reversal): 5.
+    steps = (
+        Step("outer", 90 * DEG, 100.0),
+        Step("inner", 90 * DEG, 0.5),
+        Step("inner", 90 * DEG, 80.0, rotation_time=45.0),
+        Step("outer", -90 * DEG, 0.0),
+        Step("inner", 180 * DEG, 120.0),
+    )
+    mounting = rot_axis(np.array([0.3, -0.5, 0.8]) / math.sqrt(0.98), 0.4)
+    scheme = TableScheme("custom", steps, RATE, 60.0, mounting=mounting)
+    c = cycle_integrals(scheme)
+    full, sf, mis = _numerical(scheme)
+    # Same quadrature as test_closed_form_equals_numerical_integral.
+    assert np.allclose(c.full, full, atol=1e-8)
+    assert np.allclose(c.scale_factor, sf, atol=1e-10)
+    assert np.allclose(c.misalignment, mis, atol=1e-10)
+    assert c.motor_starts == 5
+    # The mounting multiplies the attitude on the right: C_s^n = C_t^n M.
+    bare = cycle_integrals(TableScheme("custom", steps, RATE, 60.0))
+    assert np.allclose(c.full, bare.full @ mounting, atol=1e-9)
+
+
+def test_cycle_integrals_refuse_schemes_without_a_fixed_cycle_by_name():
+    from inserr.core.errors import InputError
+    from inserr.schemes.nulling import NullingTwoPosition
+
+    with pytest.raises(InputError, match="nulling-two-position has no fixed cycle"):
+        cycle_integrals(NullingTwoPosition(RATE, 300.0))
+    with pytest.raises(InputError, match="empty has no fixed cycle"):
+        cycle_integrals(TableScheme("empty", (), RATE, 60.0))
+    with pytest.raises(InputError, match="static base"):
+        cycle_integrals(build_scheme("two-position", RATE, 300.0), Turn(rate=0.01))
