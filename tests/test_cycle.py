@@ -447,6 +447,17 @@ def test_closed_form_with_mounting_slow_turn_quarter_inner_turns_and_short_stops
     # The mounting multiplies the attitude on the right: C_s^n = C_t^n M.
     bare = cycle_integrals(TableScheme("custom", steps, RATE, 60.0))
     assert np.allclose(c.full, bare.full @ mounting, atol=1e-9)
+    # The mean excursion (second antiderivatives, inner turns starting off 0 and 180
+    # deg), by dense trapezoidal integration as in the test of the catalogue's.
+    from scipy.integrate import cumulative_trapezoid
+
+    t0, tc = scheme.first_dwell, scheme.cycle_time
+    tl = build_timeline(scheme.plan(Motion(), t0 + tc + 1.0), Motion(), t0 + tc + 1.0)
+    t = np.linspace(0.0, t0 + tc, int((t0 + tc) / 0.02) + 1)
+    u = cumulative_trapezoid(tl.attitude_at(t), t, axis=0, initial=0.0)
+    mean = np.trapezoid(u[t >= t0], t[t >= t0], axis=0) / tc
+    # Trapezoid error at 0.02 s steps, < 1e-4 s (see that test).
+    assert np.allclose(c.mean_excursion, mean, atol=1e-3)
 
 
 def test_cycle_integrals_refuse_schemes_without_a_fixed_cycle_by_name():

@@ -153,3 +153,18 @@ def test_none_holds_the_start_position_for_the_whole_run():
     assert table.kind == ("stop",) and table.labels == ("stop start",)
     assert table.duration[0] == 5000.0 and table.a0[0] == 0.0 and table.b0[0] == 0.0
     assert build_scheme("none", RATE, STOP).cycle_time is None
+
+
+def test_builders_default_to_the_plain_schemes():
+    # Called without options, the builders give the plain schemes their docstrings
+    # describe: continuous rotation that never reverses (every row turns the same way),
+    # and P2's four-position cycle without the modified stops (all four stops equal).
+    from inserr.schemes.open_loop import continuous, four_position
+
+    rate = 6 * DEG
+    c = continuous(rate, 300.0)
+    assert len({math.copysign(1.0, s.angle) for s in c.steps}) == 1
+    f = four_position(rate, 300.0)
+    assert f.name == "four-position"
+    assert {s.dwell for s in f.steps} == {300.0}
+    assert f.first_dwell == 300.0
