@@ -168,3 +168,32 @@ def test_builders_default_to_the_plain_schemes():
     assert f.name == "four-position"
     assert {s.dwell for s in f.steps} == {300.0}
     assert f.first_dwell == 300.0
+
+
+def test_opening_phase_and_the_end_of_a_plan():
+    # with_start: "turn" drops the opening stop (the plan starts turning at t = 0),
+    # "stop" and a scheme without steps are returned as they are.
+    from inserr.schemes.open_loop import none_scheme, two_position, with_start
+
+    rate = 6 * DEG
+    two = two_position(rate, 300.0)
+    assert with_start(two, "stop") is two
+    none = none_scheme(rate, 300.0)
+    assert with_start(none, "turn") is none
+    turned = with_start(two, "turn")
+    assert turned.first_dwell == 0.0 and turned.steps == two.steps
+    table = turned.plan(Motion(), 1000.0)
+    assert table.kind[0] == "rotate" and table.t0[0] == 0.0
+    # A run ending exactly at a segment boundary (stop, turn, stop: 300 + 30 + 300 s)
+    # plans no segment that starts at or after the end.
+    table = two.plan(Motion(), 630.0)
+    assert np.all(table.t0 < 630.0)
+    assert table.t0[-1] + table.duration[-1] == pytest.approx(630.0, abs=1e-9)
+
+
+def test_cycle_integrals_name_an_object_without_a_name():
+    from inserr.core.errors import InputError
+    from inserr.schemes.cycle_integrals import cycle_integrals
+
+    with pytest.raises(InputError, match="not a scheme has no fixed cycle"):
+        cycle_integrals("not a scheme")
