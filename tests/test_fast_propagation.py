@@ -511,6 +511,20 @@ def _pieces_cases():
     mounting = sl.expm(np.array([[0.0, -0.35, -0.61], [0.35, 0.0, -0.87], [0.61, 0.87, 0.0]]))
     tilted = Motion(heading=0.3, pitch=2 * DEG, roll=-3 * DEG)
     turn = Turn(heading=0.2, pitch=3 * DEG, roll=2 * DEG, rate=0.5 * DEG)
+    # A heading history at rates changing every 13 s (one interval flat).
+    times = np.arange(0.0, 820.0, 13.0)
+    rates = np.random.default_rng(4).normal(size=len(times) - 1) * 0.3 * DEG
+    rates[5] = 0.0
+    headings = np.concatenate([[0.4], 0.4 + np.cumsum(rates * 13.0)])
+    history = HeadingHistory(pitch=2 * DEG, roll=1 * DEG, times=times, headings=headings)
+    from inserr.schemes.turntable import ScheduleBuilder
+
+    half_second = ScheduleBuilder()  # half-second turns between stops
+    for _ in range(4):
+        half_second.stop(20.0)
+        half_second.rotate("outer", 3 * DEG, 6 * DEG)
+        half_second.stop(20.0)
+        half_second.rotate("outer", -3 * DEG, 6 * DEG)
     return {
         "swing-two-position-mounted": (
             build_scheme("two-position", 6 * DEG, 40.0, mounting=mounting).plan(SWING, 800.0),
@@ -521,6 +535,9 @@ def _pieces_cases():
         "tilted-heading-isolation": (
             build_scheme("heading-isolation", 6 * DEG, 40.0).plan(tilted, 800.0), tilted),
         "turn-two-position": (build_scheme("two-position", 6 * DEG, 40.0).plan(turn, 800.0), turn),
+        "history-two-position": (build_scheme("two-position", 6 * DEG, 40.0).plan(history, 800.0),
+                                 history),
+        "tilted-half-second-turns": (half_second.build(), tilted),
     }  # fmt: skip
 
 

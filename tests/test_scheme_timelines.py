@@ -121,6 +121,9 @@ def test_interval_rates_carry_each_node_attitude_into_the_next(scheme, motion):
     # Each node's label is that of the table segment it lies in.
     seg = np.searchsorted(table.t0, tl.times[:-1] + 1e-6, side="right") - 1
     assert list(tl.labels) == [table.labels[k] for k in seg]
+    # What the report and the figures read back: the table's motor starts, its motion.
+    assert tl.motor_starts == table.motor_starts()
+    assert tl.meta["table"] is table and tl.meta["motion"] is motion
 
 
 def test_timeline_sub_steps_lie_on_the_global_grid():
@@ -129,7 +132,10 @@ def test_timeline_sub_steps_lie_on_the_global_grid():
     # and no sub-step is longer than it.
     motion = YawSwing(pitch=2 * DEG, roll=1 * DEG, amplitude=5 * DEG, period=90.0)
     table = build_scheme("two-position", 6 * DEG, 20.0).plan(motion, 300.0)
-    for substep, tl in ((1.0, build_timeline(table, motion, 300.0)),
+    from inserr.schemes.composition import ScheduleHistory
+
+    history = ScheduleHistory(table, motion, 300.0)
+    for substep, tl in ((1.0, build_timeline(table, motion, 300.0)), (1.0, history.timeline()),
                         (2.5, build_timeline(table, motion, 300.0, 2.5))):  # fmt: skip
         starts = set(np.round(table.t0, 9))
         on_grid = np.abs(tl.times / substep - np.round(tl.times / substep)) < 1e-9
@@ -140,12 +146,17 @@ def test_timeline_sub_steps_lie_on_the_global_grid():
 
 def test_timeline_rejects_a_run_or_sub_step_that_is_not_a_positive_time():
     from inserr.core.errors import InputError
+    from inserr.schemes.composition import ScheduleHistory
 
     table = build_scheme("two-position", 6 * DEG, 20.0).plan(Motion(), 10.0)
     assert build_timeline(table, Motion(), 0.5).times[-1] == 0.5  # shorter than a second
+    assert ScheduleHistory(table, Motion(), 0.5).duration == 0.5
     for duration, substep in ((0.0, 1.0), (math.inf, 1.0), (10.0, 0.0), (10.0, math.inf)):
         with pytest.raises(InputError):
             build_timeline(table, Motion(), duration, substep)
+    for duration in (0.0, -5.0, math.inf):
+        with pytest.raises(InputError):
+            ScheduleHistory(table, Motion(), duration)
 
 
 def _timeline_cycle_integral(tl, t0: float, t1: float) -> np.ndarray:
