@@ -118,6 +118,11 @@ def test_interval_rates_carry_each_node_attitude_into_the_next(scheme, motion):
     # vehicle is not a constant-rate turn: its axis is not the vehicle's.)
     assert _max_interval_mismatch(tl) < 1e-9
     assert tl.times[0] == 0.0 and tl.times[-1] == duration
+    # Every table segment starts at a node; no interval is shorter than 1e-9 s (the
+    # history's 1e-12 s piece is dropped, not kept).
+    starts = table.t0[table.t0 < duration]
+    assert np.abs(tl.times[np.searchsorted(tl.times, starts - 1e-9)] - starts).max() < 1e-9
+    assert np.diff(tl.times).min() > 1e-9
     # Each node's label is that of the table segment it lies in.
     seg = np.searchsorted(table.t0, tl.times[:-1] + 1e-6, side="right") - 1
     assert list(tl.labels) == [table.labels[k] for k in seg]
