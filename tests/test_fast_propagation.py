@@ -777,6 +777,59 @@ def test_static_schedule_equals_the_step_engine_on_its_timeline(scheme):
     )
 
 
+@pytest.mark.parametrize(
+    ("scheme", "motion", "dt_out", "paths"),
+    [("two-position", SWING, 1.0, {"states-grid", "cached-aligned"}),
+     ("two-position", SWING, 7.0, {"fine-each", "states-each", "cached-anywhere"}),
+     ("nulling-two-position", SWING, 1.0, {"fine-grid", "cached-blocks", "partial-table"}),
+     ("four-position", Motion(), 1.0, {"fine-grid", "rotation-grid"}),
+     ("four-position", Motion(), 7.0, {"fine-each", "states-each", "rotation-each"})],
+)  # fmt: skip
+def test_engine_takes_the_faster_paths_where_they_apply(scheme, motion, dt_out, paths):
+    # The faster ways change only the work, so the numbers cannot show them: the engine
+    # reports them. Where each must be taken: a periodic history (two-position: 4 (300
+    # + 30) = 1320 s, 11 swings; the 1 s and 60 s grids divide it) is computed for one
+    # period and copied (3 periods in the hour, the last one cut), unless the fine step
+    # does not divide the period (7 s: 7 periods would be needed); stops on the periodic
+    # swing reuse the vehicle part per phase, on a step that divides the swing period
+    # and the coarse step, is a multiple of the fine step when it can be, and keeps a
+    # window's phase within MAX_PHASE; outputs on a uniform grid are one product per
+    # window shape; a static base needs no sampled window at all (stops and turns in
+    # closed form).
+    dur = 3600.0
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(motion, dur), motion, dur)
+    res = analyze_drift(SITE, IMU, INIT, hist, dt_out=dt_out, dt_cov=60.0)
+    win, taken = res.engine["windows"], set(res.engine["paths"])
+    assert paths <= taken, taken
+    if scheme == "two-position" and dt_out == 1.0:
+        assert win["lift_period"] == 1320.0 and win["periods"] == 3
+    else:
+        assert win["lift_period"] == 0.0 and win["periods"] == 0
+    if motion is SWING:
+        step = win["phase_step"]
+        assert _is_whole(120.0 / step) and _is_whole(60.0 / step)
+        assert _is_whole(step / dt_out) == (dt_out == 1.0)
+        fastest = float(np.max(np.abs(NavModes(ErrorModel(SITE)).lam)))
+        bandwidth = float(SWING.rate_bound(np.zeros(1), np.ones(1))[0])
+        assert step * (2 * bandwidth + fastest) <= fp.MAX_PHASE
+        assert win["cached"] > 0 and win["still"] == win["rotation"] == 0
+    else:
+        assert win["phase_step"] == 0.0 and win["cached"] == win["partial"] == 0
+        assert win["direct"] == 0 and win["still"] > 0 and win["rotation"] > 0
+    if dt_out == 7.0:  # the step engine reports nothing
+        still = Timeline.static(np.eye(3), 600.0)
+        assert analyze_drift(SITE, IMU, INIT, still, dt_out=60.0, engine="exact").engine == {}
+    # The paths agree with each other: the 1 s and 7 s outputs at their common times.
+    if dt_out == 7.0:
+        ones = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+        common = np.isin(ones.t, res.t)
+        assert _relative(res.nav[np.isin(res.t, ones.t)], ones.nav[common]) < 1e-11
+
+
+def _is_whole(x: float) -> bool:
+    return abs(x - round(x)) < 1e-9
+
+
 def test_fine_blocks_cover_the_outputs_and_depend_on_their_count_only():
     for n in (0, 1, 7, fp.SPLIT_FINE, fp.SPLIT_FINE + 1, 259_201, 2_592_001):
         blocks = fp._blocks(n)

@@ -74,6 +74,11 @@ class DriftResult:
         ``accel_bias_instability``; only the non-zero ones).
     metrics : dict
         Headline numbers (see :func:`headline`).
+    engine : dict
+        How the fast engine computed the constant errors (empty for the exact one):
+        ``windows`` (quadrature windows by kind, lifted periods, lift period and phase
+        step; :class:`~inserr.model.fast_propagation.ConstantErrorResponse`), ``paths``
+        (the faster ways taken, sorted) and ``nodes`` (attitude evaluations).
 
     The derived curves (:attr:`horizontal`, :attr:`rms_horizontal`,
     :attr:`worst_horizontal`, :attr:`noise_horizontal_sigma`) are computed on first
@@ -89,6 +94,7 @@ class DriftResult:
     source_heading: np.ndarray
     noise_cov: dict[str, np.ndarray]
     metrics: dict = field(default_factory=dict)
+    engine: dict = field(default_factory=dict)
 
     @cached_property
     def horizontal(self) -> np.ndarray:
@@ -212,6 +218,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
     t_cov = output_grid(duration, dt_cov)
     sources = constant_sources(imu, init, vertical)
     model = ErrorModel(site, layout_for(imu.without_noise()), vertical=vertical)
+    engine_info: dict = {}
 
     def timeline() -> Timeline:
         if isinstance(history, Timeline):
@@ -222,6 +229,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
         if engine == "fast":
             hist = TimelineHistory(history) if isinstance(history, Timeline) else history
             resp = constant_error_response(model, hist, source_set(model, sources), t, t_cov)
+            engine_info.update(windows=resp.windows, paths=sorted(resp.paths), nodes=resp.nodes)
             return resp.fine, resp.coarse
         tl = timeline()
         disc = discretizer_for(model)
@@ -287,6 +295,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
         src_head = np.zeros((len(t_cov), 0))
 
     res = DriftResult(t, nav, att, t_cov, sources, src_h, src_head, noise_cov)
+    res.engine = engine_info
     res.metrics = headline(res)
     return res
 
