@@ -404,3 +404,122 @@ def test_schedule_history_is_the_gimbal_attitude_and_its_rate_the_derivative(sch
     # The vehicle part alone (C_b^n and w_nb^n): the motion's own attitude and rate.
     cv, wv = hist.evaluate_vehicle(t)
     assert np.abs(cv - c_bn).max() < 1e-15 and np.array_equal(wv, SWING_TILTED.rate_n(t))
+
+
+def _y_axis_n(c_tilt: np.ndarray, a: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """The IMU y axis in n, C_tilt rot_z(a) C_s^t e_y, for outer angles a (rows E, N, U)."""
+    u = m @ np.array([0.0, 1.0, 0.0])
+    ru = np.stack([np.cos(a) * u[0] - np.sin(a) * u[1], np.sin(a) * u[0] + np.cos(a) * u[1],
+                   np.full_like(a, u[2])], 1)  # fmt: skip
+    return ru @ c_tilt.T
+
+
+@pytest.mark.parametrize(
+    "pitch, roll, mount",
+    [(3.0, -2.0, None), (25.0, 40.0, (0.3, -0.5, 0.2)), (10.0, -15.0, (1.2, 0.0, 0.0))],
+)
+def test_outer_axis_heading_against_the_sampled_geometry(pitch, roll, mount):
+    # The IMU y axis v(a) = C_tilt rot_z(a) C_s^t e_y written here: the phasor is
+    # (v_N + i v_E) / |v_h| for scalars and arrays; min_horizontal is the least |v_h|
+    # over all angles (a tight bound: the tilt and the mounting can line up); the
+    # curvature bound holds for the second difference of the heading on a 1e-3 rad grid
+    # (its O(h^2) error is ~1e-7 here).
+    from inserr.schemes.turntable import OuterAxisHeading
+
+    c_tilt = _rot(0, math.radians(pitch)) @ _rot(1, math.radians(roll))
+    m = np.eye(3) if mount is None else _rot(0, mount[0]) @ _rot(1, mount[1]) @ _rot(2, mount[2])
+    geo = OuterAxisHeading(c_tilt, None if mount is None else m)
+    a = np.linspace(0.0, 2 * math.pi, 6284)
+    v = _y_axis_n(c_tilt, a, m)
+    h = np.hypot(v[:, 0], v[:, 1])
+    want = (v[:, 1] + 1j * v[:, 0]) / h
+    assert np.abs(geo.phasor(a) - want).max() < 1e-13
+    assert abs(geo.phasor(float(a[1000])) - want[1000]) < 1e-13
+    assert h.min() - 1e-6 <= geo.min_horizontal() <= h.min()
+    heading = np.unwrap(np.arctan2(v[:, 0], v[:, 1]))
+    step = a[1] - a[0]
+    curvature = np.abs(np.diff(heading, 2)) / step**2
+    assert curvature.max() <= geo.curvature_bound() * (1 + 1e-6)
+    lo, hi = geo.slope_bounds()
+    slope = -np.diff(heading) / step
+    assert lo - 1e-6 <= slope.min() and slope.max() <= hi + 1e-6
+    # imu_heading_offset with its default inner angle (0) is this heading.
+    from inserr.schemes.turntable import imu_heading_offset
+
+    off = imu_heading_offset(c_tilt, a[:50], mounting=None if mount is None else m)
+    assert np.abs(off - np.arctan2(v[:50, 0], v[:50, 1])).max() < 1e-12
+
+
+def test_outer_axis_heading_with_the_y_axis_along_the_outer_axis_has_no_bounds():
+    # Mounted with its y axis up on a level vehicle, the IMU heading is undefined:
+    # no finite slope or curvature bound, no horizontal part.
+    from inserr.schemes.turntable import OuterAxisHeading
+
+    geo = OuterAxisHeading(np.eye(3), _rot(0, math.pi / 2))
+    assert geo.curvature_bound() == math.inf
+    assert geo.slope_bounds() == (-math.inf, math.inf)
+    assert geo.min_horizontal() < 1e-6
+
+
+def test_isolation_angle_on_inverted_and_strongly_tilted_vehicles():
+    # Upside down (roll near 180 deg) the outer gimbal turns the IMU the other way: the
+    # root with the positive projection on the target is then the other one. Random
+    # targets, attitudes and inner angles (one inner angle given as a one-element
+    # array). A target the y axis cannot reach (tilted up 80 deg by its mounting on a
+    # vehicle tilted 30 deg): the angle brings it closest, |E cos H - N sin H| least
+    # (checked against 20 000 angles).
+    from inserr.schemes.turntable import isolation_angle
+
+    rng = np.random.default_rng(11)
+    m = _rot(2, 0.3) @ _rot(0, 0.2)
+    for roll in (math.pi, 0.6, -2.8):
+        c_bn = np.array([_rot(2, rng.uniform(-3, 3)) @ _rot(1, roll + rng.normal(0, 0.1))
+                         @ _rot(0, rng.normal(0, 0.3)) for _ in range(8)])  # fmt: skip
+        b = rng.normal(0, 0.3, size=8)
+        target = rng.uniform(-math.pi, math.pi, size=8)
+        a = isolation_angle(c_bn, b, m, target)
+        for k in range(8):
+            y_n = c_bn[k] @ _rot(2, a[k]) @ _rot(0, b[k]) @ m @ np.array([0.0, 1.0, 0.0])
+            assert math.remainder(math.atan2(y_n[0], y_n[1]) - target[k], 2 * math.pi) == (
+                pytest.approx(0.0, abs=1e-9)
+            )
+        one = isolation_angle(c_bn[:1], b[:1], m, target[:1])
+        assert one.shape == (1,) and one[0] == pytest.approx(a[0], abs=1e-12)
+    up = _rot(0, math.radians(80.0))
+    tilt = _rot(0, math.radians(30.0))
+    for target in (0.0, math.pi / 2, math.pi):
+        a = float(isolation_angle(tilt[None], 0.0, up, target)[0])
+        grid = np.linspace(-math.pi, math.pi, 20001)
+        across = np.array([math.cos(target), -math.sin(target), 0.0])  # E cos H - N sin H
+        miss_a = abs(float(_y_axis_n(tilt, np.array([a]), up)[0] @ across))
+        assert np.isfinite(a) and miss_a <= np.abs(_y_axis_n(tilt, grid, up) @ across).min() + 1e-9
+
+
+def test_motor_starts_and_isolation_segments_as_documented():
+    # A start for a turn after a stop or a reversal (not for a turn continuing in the
+    # same sense), one for an isolation entered from a stop, plus the scheme's recorded
+    # isolation reversals; an isolation segment moves the outer gimbal with no constant
+    # rate, and is kept however short.
+    from inserr.schemes.turntable import ScheduleBuilder
+
+    b = ScheduleBuilder()
+    b.stop(10.0)
+    b.rotate("outer", math.pi / 2, 0.1)  # start 1
+    b.rotate("outer", math.pi / 2, 0.1)  # continues
+    b.rotate("inner", math.pi / 2, 0.1)  # same sense: continues
+    b.rotate("outer", -math.pi / 2, 0.1)  # reversal: start 2
+    b.stop(10.0)
+    b.isolate(0.5, 0.0, 0.0, 0.0)  # from a stop: start 3
+    b.isolate(30.0, 0.0, 0.0, 0.0)
+    b.isolate(0.0, 0.0, 0.0, 0.0)  # nothing
+    b.meta["isolation_reversals"] = 2
+    table = b.build()
+    assert table.motor_starts() == 3 + 2
+    iso = [k for k, kind in enumerate(table.kind) if kind == "isolate"]
+    assert len(iso) == 2 and table.duration[iso[0]] == 0.5
+    assert all(table.gimbal[k] == "outer" and table.rate[k] == 0.0 for k in iso)
+    assert table.labels[iso[0]] == "isolate"
+    first = ScheduleBuilder()
+    first.isolate(5.0, 0.0, 0.0, 0.0)  # the run starts from rest: a start
+    first.rotate("outer", 1.0, 0.1)  # after an isolation: a start
+    assert first.build().motor_starts() == 2
