@@ -676,7 +676,7 @@ def _period_cases():
         "creeping-45-deg-per-cycle": (
             built(_cycles(B(), 3, net=-135 * DEG), 132.5), 397.5, None),
         "declared-cycle-half-a-second-off": (
-            built(_cycles(B(), 3, dwell=39.5), 140.0), 418.5, None),
+            built(_cycles(B(), 3, dwell=40.5), 140.0), 421.0, None),
         "segments-end-after-two-cycles": (built(_cycles(B(), 2), 140.0), 420.0, None),
         "last-turn-0.5-s-short": (built(_cycles(B(), 3, shorter(0.5)), 140.0), 420.0, None),
         "last-turn-5e-9-s-short": (built(_cycles(B(), 3, shorter(5e-9)), 140.0), 420.0, None),

@@ -443,6 +443,19 @@ def test_outer_axis_heading_against_the_sampled_geometry(pitch, roll, mount):
     lo, hi = geo.slope_bounds()
     slope = -np.diff(heading) / step
     assert lo - 1e-6 <= slope.min() and slope.max() <= hi + 1e-6
+    # The bounds are the closed forms of their derivation (docstrings), from the outer
+    # axis's tilt theta and the bound s = |u_z| cos theta + |u_h| sin theta of |v_U|, which
+    # the sampled y axis attains; widened by 1e-12 (relative and absolute) at most.
+    k_up = c_tilt[2, 2]
+    sin_t = math.sqrt(1.0 - k_up**2)
+    u = m @ np.array([0.0, 1.0, 0.0])
+    s = abs(u[2]) * abs(k_up) + math.hypot(u[0], u[1]) * sin_t
+    assert abs(v[:, 2]).max() == pytest.approx(s, abs=1e-6)
+    d = 1.0 - s * s
+    curvature_form = (sin_t**2 + s * sin_t) / d + 2.0 * (s * sin_t) ** 2 / d**2
+    assert curvature_form <= geo.curvature_bound() <= curvature_form * (1 + 3e-12) + 3e-12
+    eps = s * sin_t / math.sqrt(d)
+    assert k_up - eps - 3e-12 <= lo <= k_up - eps and k_up + eps <= hi <= k_up + eps + 3e-12
     # imu_heading_offset with its default inner angle (0) is this heading.
     from inserr.schemes.turntable import imu_heading_offset
 
@@ -521,5 +534,8 @@ def test_motor_starts_and_isolation_segments_as_documented():
     assert table.labels[iso[0]] == "isolate"
     first = ScheduleBuilder()
     first.isolate(5.0, 0.0, 0.0, 0.0)  # the run starts from rest: a start
-    first.rotate("outer", 1.0, 0.1)  # after an isolation: a start
-    assert first.build().motor_starts() == 2
+    first.rotate("outer", 0.0, 0.1)  # no turn: nothing
+    first.rotate("outer", 1.0, 0.1)  # after an isolation: a start (a 1 rad turn, 10 s)
+    built = first.build()
+    assert built.motor_starts() == 2 and built.kind == ("isolate", "rotate")
+    assert built.duration[1] == pytest.approx(10.0)
