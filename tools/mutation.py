@@ -803,7 +803,10 @@ def full(
         # --mutants: a part of the core (e.g. one module), scored on its own.
         names = list(only) if only else list(FULL_SCOPE)
         if survivors_only and (copy / "mutants").exists():
-            # Rerun only what the last run did not kill (new tests, same mutants).
+            # Rerun only what the last run did not kill (new tests, same mutants). mutmut
+            # records which tests reach which function once, and later adds only tests
+            # with new names: forget the record, so that changed tests count too.
+            (copy / "mutants" / "mutmut-stats.json").unlink(missing_ok=True)
             names = [n for n, s in _statuses(copy, only).items() if s not in ("killed", "timeout")]
             print(f"rerunning the {len(names)} mutants in scope not killed last time")
         print(f"full mode: mutmut in {copy} ({jobs} children); this takes a while")
