@@ -391,6 +391,14 @@ def test_schedule_history_is_the_gimbal_attitude_and_its_rate_the_derivative(sch
     expected = np.array([cb @ _rz(ai) @ _rx(bi) @ m for cb, ai, bi in zip(c_bn, a, b, strict=True)])
     assert np.abs(c - expected).max() < 1e-12
     assert np.any(np.abs(b) > 1.0) == (scheme == "quarter-turns")
+    # The table's own products: C_s^b, and the IMU heading (of its y axis, in [0, 2 pi)).
+    c_sb = np.array([_rz(ai) @ _rx(bi) @ m for ai, bi in zip(a, b, strict=True)])
+    assert np.abs(table.dcm_at(t, SWING_TILTED) - c_sb).max() < 1e-12
+    y = expected[:, :, 1]
+    heading = np.mod(np.arctan2(y[:, 0], y[:, 1]), 2 * np.pi)
+    got = table.imu_heading(t, SWING_TILTED)
+    assert np.abs(np.angle(np.exp(1j * (got - heading)))).max() < 1e-12
+    assert np.all((got >= 0.0) & (got < 2 * np.pi))
     c_plus, _ = hist.evaluate(t + h, piece)
     c_minus, _ = hist.evaluate(t - h, piece)
     r = c_plus @ np.swapaxes(c_minus, 1, 2)
