@@ -480,6 +480,10 @@ def test_outer_axis_heading_with_the_y_axis_along_the_outer_axis_has_no_bounds()
     assert geo.curvature_bound() == math.inf
     assert geo.slope_bounds() == (-math.inf, math.inf)
     assert geo.min_horizontal() < 1e-6
+    # Any outer angle holds such a heading: the isolation angle is still a number.
+    from inserr.schemes.turntable import isolation_angle
+
+    assert np.all(np.isfinite(isolation_angle(np.eye(3)[None], 0.0, _rot(0, math.pi / 2), 0.3)))
 
 
 def test_isolation_angle_on_inverted_and_strongly_tilted_vehicles():
