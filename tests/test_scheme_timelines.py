@@ -483,7 +483,8 @@ def test_outer_axis_heading_with_the_y_axis_along_the_outer_axis_has_no_bounds()
     # Any outer angle holds such a heading: the isolation angle is still a number.
     from inserr.schemes.turntable import isolation_angle
 
-    assert np.all(np.isfinite(isolation_angle(np.eye(3)[None], 0.0, _rot(0, math.pi / 2), 0.3)))
+    y_up = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # exactly
+    assert np.all(np.isfinite(isolation_angle(np.eye(3)[None], 0.0, y_up, 0.3)))
 
 
 def test_isolation_angle_on_inverted_and_strongly_tilted_vehicles():
