@@ -828,6 +828,45 @@ def test_engine_takes_the_faster_paths_where_they_apply(scheme, motion, dt_out, 
         assert _relative(res.nav[np.isin(res.t, ones.t)], ones.nav[common]) < 1e-11
 
 
+@pytest.mark.parametrize("bandwidth", [0.05, 0.3, 1.2])
+@pytest.mark.parametrize("dt_coarse, dt_fine", [(60.0, 1.0), (60.0, 7.0), (45.0, 1.0),
+                                                (120.0, 1.0), (60.0, None)])  # fmt: skip
+def test_phase_step_is_the_longest_within_the_phase_budget_among_the_best_aligned(
+    bandwidth, dt_coarse, dt_fine
+):
+    # The documented choice, checked as properties of the returned step g = P / m (P the
+    # 120 s vehicle period): g keeps a window's phase (2 bandwidth + fastest mode) g
+    # within MAX_PHASE; no step P / m' within the budget is better aligned (dividing the
+    # coarse step counts first, being a multiple of the fine step second); none as well
+    # aligned is longer. Pieces without phase classes, without a vehicle period, or with
+    # nothing cacheable (all still or constant-rate) get no step.
+    from inserr.model.attitude_history import Pieces
+
+    period, fastest = 120.0, 1.24e-3
+    n = 4
+    pieces = Pieces(np.arange(n + 1) * 30.0, np.full(n, bandwidth), np.zeros(n, bool),
+                    np.full((n, 3, 3), np.nan), period, None, np.zeros(n, int))  # fmt: skip
+    t_coarse = np.arange(0.0, 3600.0 + dt_coarse / 2, dt_coarse)
+    g = fp.phase_step(pieces, t_coarse, dt_fine, fastest)
+    m = round(period / g)
+    assert _is_whole(period / g) and m >= 1
+    rate = 2 * bandwidth + fastest
+    assert g * rate <= fp.MAX_PHASE
+
+    def score(step):
+        fine = dt_fine is not None and _is_whole(step / dt_fine) and step >= dt_fine
+        return 2 * int(_is_whole(dt_coarse / step)) + int(fine)
+
+    for m2 in range(1, m + 400):
+        g2 = period / m2
+        if g2 * rate <= fp.MAX_PHASE:
+            assert score(g2) < score(g) or (score(g2) == score(g) and g2 <= g), (m2, g2)
+    for change in ({"phase_class": None}, {"vehicle_period": None},
+                   {"still": np.ones(n, bool)}, {"constant": np.ones(n, bool)}):  # fmt: skip
+        other = dataclasses.replace(pieces, **change)
+        assert fp.phase_step(other, t_coarse, dt_fine, fastest) is None
+
+
 def _is_whole(x: float) -> bool:
     return abs(x - round(x)) < 1e-9
 
