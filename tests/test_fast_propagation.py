@@ -867,6 +867,15 @@ def test_phase_step_is_the_longest_within_the_phase_budget_among_the_best_aligne
         assert fp.phase_step(other, t_coarse, dt_fine, fastest) is None
 
 
+def test_grid_step_recognises_uniform_grids_from_zero():
+    # 0, h, 2h, ... with a shorter last step is a grid of step h; anything else is not.
+    assert fp._grid_step(np.array([0.0, 1.0, 2.0, 3.0])) == 1.0
+    assert fp._grid_step(np.array([0.0, 1.0, 2.0, 2.5])) == 1.0
+    assert fp._grid_step(np.array([0.0, 60.0])) == 60.0
+    for t in ([0.0], [1.0, 2.0, 3.0], [0.0, 1.0, 2.5, 3.0], [0.0, 1.0, 2.0, 3.5, 4.0]):
+        assert fp._grid_step(np.array(t)) is None, t
+
+
 def _is_whole(x: float) -> bool:
     return abs(x - round(x)) < 1e-9
 
