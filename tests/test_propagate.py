@@ -57,6 +57,11 @@ def test_engine_equals_naive_expm_chain():
     ref = np.array(ref)
     # Same exact transition, different grouping (powers vs single steps): roundoff only.
     assert np.allclose(got, ref, rtol=1e-10, atol=1e-14)
+    # By default the nine navigation states are recorded, of one state or of many.
+    nav = propagate_states(Discretizer(model), tl, x0, t_out)
+    assert nav.shape == (len(t_out), 9, 3) and np.allclose(nav, ref[:, :9], rtol=1e-10, atol=1e-14)
+    one = propagate_states(Discretizer(model), tl, x0[:, 1], t_out)
+    assert one.shape == (len(t_out), 9) and np.allclose(one, ref[:, :9, 1], rtol=1e-10, atol=1e-14)
 
 
 def test_exostates_follow_the_imu_attitude():
