@@ -545,6 +545,19 @@ def test_motor_starts_and_isolation_segments_as_documented():
     assert len(iso) == 2 and table.duration[iso[0]] == 0.5
     assert all(table.gimbal[k] == "outer" and table.rate[k] == 0.0 for k in iso)
     assert table.labels[iso[0]] == "isolate"
+    # Stops and turns: no gimbal label on a stop, no heading target or rate outside an
+    # isolation; the inner gimbal's angle carries into the next segment; the builder
+    # starts at angles 0 and keeps its mounting.
+    mounting = _rot(1, 0.3)
+    c = ScheduleBuilder(mounting=mounting)
+    c.stop(0.5)
+    c.rotate("inner", -0.5, 0.1)
+    c.stop(2.0)
+    built = c.build()
+    assert built.mounting is mounting and built.a0[0] == 0.0 and built.b0[0] == 0.0
+    assert built.kind == ("stop", "rotate", "stop") and built.b0[2] == pytest.approx(-0.5)
+    assert built.gimbal[0] == "" and np.all(built.target_rate == 0.0)
+    assert np.all(np.isnan(built.target_heading))
     first = ScheduleBuilder()
     first.isolate(5.0, 0.0, 0.0, 0.0)  # the run starts from rest: a start
     first.rotate("outer", 0.0, 0.1)  # no turn: nothing
@@ -552,3 +565,19 @@ def test_motor_starts_and_isolation_segments_as_documented():
     built = first.build()
     assert built.motor_starts() == 2 and built.kind == ("isolate", "rotate")
     assert built.duration[1] == pytest.approx(10.0)
+
+
+def test_outer_angle_is_continuous_through_isolation_segments():
+    # angles_at returns continuous angles (not wrapped): through heading-isolation holds
+    # and compensated turns on a swinging vehicle heading 170 deg, the outer angle moves
+    # by at most (swing rate + turn rate) dt between samples 0.1 s apart, and each
+    # isolation segment starts at its recorded start angle.
+    motion = YawSwing(heading=170 * DEG, pitch=2 * DEG, roll=-1 * DEG, amplitude=6 * DEG,
+                      period=90.0)  # fmt: skip
+    table = build_scheme("heading-isolation", 6 * DEG, 20.0).plan(motion, 600.0)
+    t = np.arange(0.0, 600.0, 0.1)
+    a, _ = table.angles_at(t, motion)
+    assert np.abs(np.diff(a)).max() < (6 * DEG + 6 * DEG) * 0.1 * 1.5
+    iso = np.array(table.kind) == "isolate"
+    start, _ = table.angles_at(table.t0[iso], motion)
+    assert np.abs(start - table.a0[iso]).max() < 1e-6
