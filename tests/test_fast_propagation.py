@@ -872,8 +872,29 @@ def test_grid_step_recognises_uniform_grids_from_zero():
     assert fp._grid_step(np.array([0.0, 1.0, 2.0, 3.0])) == 1.0
     assert fp._grid_step(np.array([0.0, 1.0, 2.0, 2.5])) == 1.0
     assert fp._grid_step(np.array([0.0, 60.0])) == 60.0
-    for t in ([0.0], [1.0, 2.0, 3.0], [0.0, 1.0, 2.5, 3.0], [0.0, 1.0, 2.0, 3.5, 4.0]):
+    assert fp._grid_step(np.array([0.0, 1.0, 1.5])) == 1.0
+    for t in ([0.0], [1.0, 2.0, 3.0], [0.0, 1.0, 2.5, 3.0], [0.0, 1.0, 2.0, 3.5, 4.0],
+              [0.0, 1.0, 2.000001, 3.0], [0.0, 1.0, 2.0 + 5e-9, 3.0]):  # fmt: skip
         assert fp._grid_step(np.array(t)) is None, t
+
+
+def test_lifting_needs_two_whole_periods_after_the_start():
+    # Two-position on the swing repeats every 1320 s: lifted from exactly two periods
+    # on. A static table whose 140 s cycle starts after a 60 s stop repeats from 60 s;
+    # both grids (1 s, 60 s) divide 3 cycles, 420 s, so the run needs 60 + 2 x 420 s.
+    from inserr.schemes.turntable import ScheduleBuilder
+
+    two = build_scheme("two-position", 6 * DEG, 300.0)
+    for dur, expected in ((2640.0, (0.0, 1320.0)), (2580.0, None)):
+        hist = ScheduleHistory(two.plan(SWING, dur), SWING, dur)
+        assert fp._lifting(hist, output_grid(dur, 1.0), output_grid(dur, 60.0)) == expected
+    b = ScheduleBuilder()
+    b.stop(60.0)
+    table = _cycles(b, 7).build(cycle=140.0)
+    for dur, expected in ((900.0, (60.0, 420.0)), (840.0, None)):
+        hist = ScheduleHistory(table, Motion(), dur)
+        assert hist.period() == (60.0, 140.0)
+        assert fp._lifting(hist, output_grid(dur, 1.0), output_grid(dur, 60.0)) == expected
 
 
 def _is_whole(x: float) -> bool:
