@@ -319,3 +319,28 @@ def test_noise_intensity_and_attitude_error_of_augmented_states():
     tan = math.tan(math.radians(34.0))
     want = [1e-6 + 50.0 / site.r_m, -2e-6 + 100.0 / site.r_n, 3e-6 + 100.0 * tan / site.r_n]
     assert np.allclose(attitude_error(site, x), want, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("vertical", ["clamped", "free"])
+def test_coupled_exo_is_the_input_block_times_the_exo_exponential(vertical):
+    # Its definition: B(w) expm(E(w) s), with B the nav-by-exo block and E the exo block
+    # of the model's own matrix, the exponential by scipy; every exo kind, both vertical
+    # modes (clamped: no dv_U rows), two rates and three times at once.
+    model = ErrorModel(
+        Site.from_degrees(34.0),
+        Layout(bias=True, scale_misalignment=True, bias_instability=True),
+        vertical=vertical,
+        gyro_correlation_time=300.0,
+        accel_correlation_time=200.0,
+    )
+    w = np.array([[0.0, 0.0, 0.0], [0.02, -0.05, 0.1]])
+    s = np.array([0.0, 7.5, 40.0])
+    got = model.coupled_exo(w, s)
+    assert got.shape == (2, 3, 9, model.layout.n - 9)
+    for k in range(2):
+        a = model.matrix(w[k])
+        b, e = a[:9, 9:], a[9:, 9:]
+        for j in range(3):
+            want = b @ sl.expm(e * s[j])
+            assert np.allclose(got[k, j], want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+    assert np.any(got[..., 5, :] != 0.0) == (vertical == "free")
