@@ -344,3 +344,9 @@ def test_coupled_exo_is_the_input_block_times_the_exo_exponential(vertical):
             want = b @ sl.expm(e * s[j])
             assert np.allclose(got[k, j], want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
     assert np.any(got[..., 5, :] != 0.0) == (vertical == "free")
+    # One rate and one time given as (3,) and a float: the same, shaped (1, 1, ...).
+    assert np.array_equal(model.coupled_exo(w[1], 7.5), got[1:2, 1:2])
+    e_s = model.exo_transition(w[1], 7.5)
+    assert e_s.shape == (1, 1, model.layout.n - 9, model.layout.n - 9)
+    want = sl.expm(model.matrix(w[1])[9:, 9:] * 7.5)
+    assert np.allclose(e_s[0, 0], want, rtol=1e-12, atol=1e-13)
