@@ -62,6 +62,26 @@ def test_engine_equals_naive_expm_chain():
     assert nav.shape == (len(t_out), 9, 3) and np.allclose(nav, ref[:, :9], rtol=1e-10, atol=1e-14)
     one = propagate_states(Discretizer(model), tl, x0[:, 1], t_out)
     assert one.shape == (len(t_out), 9) and np.allclose(one, ref[:, :9, 1], rtol=1e-10, atol=1e-14)
+    # Several grids in one pass, none starting at 0: a uniform one from 30 s (runs of
+    # equal steps), the timeline's own nodes (steps of different lengths), one empty;
+    # index arrays for rows and columns.
+    from inserr.model.exact_propagation import Output, propagate_outputs
+
+    later = np.flatnonzero(t_out >= 30.0)
+    nodes = np.array([100.0, 115.0, 152.5])
+    rows, cols = np.array([6, 7, 0]), np.array([2, 0])
+    a, b, empty = propagate_outputs(
+        Discretizer(model), tl, x0,
+        [Output(t_out[later], rows, cols), Output(nodes, slice(0, 9), slice(1, 2)),
+         Output(np.array([]))],
+    )  # fmt: skip
+    assert np.allclose(a, ref[later][:, rows][:, :, cols], rtol=1e-10, atol=1e-14)
+    at_nodes = np.array([ref[np.flatnonzero(np.isclose(t_out, t))[0]] for t in nodes[:2]])
+    assert np.allclose(b[:2], at_nodes[:, :9, 1:2], rtol=1e-10, atol=1e-14)
+    assert empty.shape == (0, 9, 3)
+    noisy = Discretizer(model, model.noise_intensity(1e-6, 1e-5))
+    none = propagate_covariance(noisy, tl, np.eye(model.layout.n), np.array([]))
+    assert none.shape == (0, model.layout.n, model.layout.n)
 
 
 def test_exostates_follow_the_imu_attitude():
