@@ -897,6 +897,20 @@ def test_lifting_needs_two_whole_periods_after_the_start():
         assert fp._lifting(hist, output_grid(dur, 1.0), output_grid(dur, 60.0)) == expected
 
 
+def test_drift_analysis_defaults_are_one_second_outputs_one_minute_budget_one_second_steps():
+    # Documented defaults: dt_out 1 s, dt_cov 60 s, and the step engine cuts continuous
+    # motion into 1 s sub-steps (the same numbers as asking for 1 s).
+    dur = 600.0
+    hist = ScheduleHistory(build_scheme("two-position", 6 * DEG, 120.0).plan(SWING, dur), SWING,
+                           dur)  # fmt: skip
+    res = analyze_drift(SITE, IMU, INIT, hist)
+    assert np.array_equal(res.t, np.arange(0.0, dur + 0.5, 1.0))
+    assert np.array_equal(res.t_cov, np.arange(0.0, dur + 30.0, 60.0))
+    kw = dict(dt_out=60.0, engine="exact")
+    assert np.array_equal(analyze_drift(SITE, IMU, INIT, hist, **kw).nav,
+                          analyze_drift(SITE, IMU, INIT, hist, substep=1.0, **kw).nav)  # fmt: skip
+
+
 def _is_whole(x: float) -> bool:
     return abs(x - round(x)) < 1e-9
 

@@ -433,3 +433,35 @@ def test_alignment_truth_noise_factor_is_a_square_root_of_qd():
     lf = _noise_factor(qd)
     assert np.linalg.matrix_rank(qd, tol=1e-6 * np.abs(qd).max()) < len(qd)  # singular
     assert np.allclose(lf @ lf.T, qd, rtol=0, atol=1e-10 * np.abs(qd).max())
+
+
+def test_each_noise_source_has_its_own_covariance_on_both_engines():
+    # One propagation per noise source: with ARW, VRW and both Gauss-Markov biases in
+    # the budget, the ARW entry is the white-noise covariance of the ARW alone and the
+    # VRW entry that of the VRW alone (closed forms, fast_propagation.white_noise_
+    # covariance), and each Gauss-Markov entry is the same on the step engine (augmented
+    # states, Van Loan) as on the fast one (its own closed form). Both exact: 1e-7 of
+    # the largest entry of each block, the step engine's accumulated round-off.
+    from inserr.model.fast_propagation import white_noise_covariance
+
+    imu = ImuErrors(arw=0.002 * DEG_PER_SQRT_HOUR, vrw=20 * MICRO_G,
+                    gyro_bias_instability=0.01 * DEG_PER_HOUR, gyro_correlation_time=900.0,
+                    accel_bias_instability=30 * MICRO_G, accel_correlation_time=600.0)  # fmt: skip
+    tl = Timeline.static(np.eye(3), 7200.0)
+    runs = {e: analyze_drift(Site(0.0), imu, InitialErrors(), tl, dt_cov=600.0, engine=e)
+            for e in ("fast", "exact")}  # fmt: skip
+    t = runs["fast"].t_cov
+    white = ErrorModel(Site(0.0), Layout(bias=False))
+    alone = {"arw": white_noise_covariance(white, imu.arw, 0.0, t),
+             "vrw": white_noise_covariance(white, 0.0, imu.vrw, t)}  # fmt: skip
+
+    def close(a, b):
+        return np.allclose(a, b, rtol=0, atol=1e-7 * np.abs(b).max())
+
+    for res in runs.values():
+        assert set(res.noise_cov) == {"arw", "vrw", "gyro_bias_instability",
+                                      "accel_bias_instability"}  # fmt: skip
+        for name, p in alone.items():
+            assert close(res.noise_cov[name], p), name
+    for name in ("gyro_bias_instability", "accel_bias_instability"):
+        assert close(runs["exact"].noise_cov[name], runs["fast"].noise_cov[name]), name
