@@ -230,7 +230,8 @@ def test_results_do_not_depend_on_cache_history():
 
 
 @pytest.mark.parametrize(
-    "t_out", [[0.0, 50.0, 50.0, 100.0], [0.0, 50.0, 150.0], [10.0, 5.0], [0.0, np.nan]]
+    "t_out",
+    [[0.0, 50.0, 50.0, 100.0], [0.0, 50.0, 150.0], [10.0, 5.0], [0.0, np.nan], [-1.0, 0.0, 50.0]],
 )
 def test_bad_output_grids_are_refused_not_extrapolated(t_out):
     # A duplicate time used to leave its row uninitialised; a time past the end was
@@ -239,6 +240,19 @@ def test_bad_output_grids_are_refused_not_extrapolated(t_out):
     tl = Timeline.static(np.eye(3), 100.0)
     with pytest.raises(ValueError, match="output times"):
         propagate_states(Discretizer(model), tl, np.zeros(model.layout.n), np.array(t_out))
+
+
+def test_steps_end_at_every_timeline_node_and_output_time_by_default():
+    # make_steps' default uses the timeline: every step lies inside one interval, so the
+    # steps end at the nodes and at the output times; without it, at the outputs only.
+    from inserr.model.exact_propagation import make_steps
+
+    tl = _stop_and_turn_timeline()
+    t_out = np.array([0.0, 50.0, 120.0, 167.5])
+    ends = np.cumsum(make_steps(tl, t_out).dt)
+    assert np.allclose(ends, [50.0, 100.0, 115.0, 120.0, 152.5, 167.5], rtol=0, atol=1e-9)
+    plain = np.cumsum(make_steps(tl, t_out, use_omega=False).dt)
+    assert np.allclose(plain, [50.0, 120.0, 167.5], rtol=0, atol=1e-9)
 
 
 def test_cycle_integrals_accept_a_motion_that_does_not_move():
