@@ -435,23 +435,34 @@ def test_alignment_truth_noise_factor_is_a_square_root_of_qd():
     assert np.allclose(lf @ lf.T, qd, rtol=0, atol=1e-10 * np.abs(qd).max())
 
 
-def test_each_noise_source_has_its_own_covariance_on_both_engines():
+@pytest.mark.parametrize("vertical", ["clamped", "free"])
+def test_each_noise_source_has_its_own_covariance_on_both_engines(vertical):
     # One propagation per noise source: with ARW, VRW and both Gauss-Markov biases in
     # the budget, the ARW entry is the white-noise covariance of the ARW alone and the
     # VRW entry that of the VRW alone (closed forms, fast_propagation.white_noise_
     # covariance), and each Gauss-Markov entry is the same on the step engine (augmented
     # states, Van Loan) as on the fast one (its own closed form). Both exact: 1e-7 of
-    # the largest entry of each block, the step engine's accumulated round-off.
+    # the largest entry of each block, the step engine's accumulated round-off. The
+    # free vertical channel (its own modes) too, over half an hour; the fast engine on a
+    # schedule held still gives the same as on its timeline. Each result says how it
+    # was computed.
     from inserr.model.fast_propagation import white_noise_covariance
+    from inserr.schemes.catalogue import build_scheme
+    from inserr.schemes.composition import ScheduleHistory
+    from inserr.schemes.vehicle_motion import Motion
 
     imu = ImuErrors(arw=0.002 * DEG_PER_SQRT_HOUR, vrw=20 * MICRO_G,
                     gyro_bias_instability=0.01 * DEG_PER_HOUR, gyro_correlation_time=900.0,
                     accel_bias_instability=30 * MICRO_G, accel_correlation_time=600.0)  # fmt: skip
-    tl = Timeline.static(np.eye(3), 7200.0)
-    runs = {e: analyze_drift(Site(0.0), imu, InitialErrors(), tl, dt_cov=600.0, engine=e)
+    dur = 7200.0 if vertical == "clamped" else 1800.0
+    tl = Timeline.static(np.eye(3), dur)
+    kw = dict(dt_cov=600.0, vertical=vertical)
+    runs = {e: analyze_drift(Site(0.0), imu, InitialErrors(), tl, engine=e, **kw)
             for e in ("fast", "exact")}  # fmt: skip
+    held = ScheduleHistory(build_scheme("none", 0.1, 60.0).plan(Motion(), dur), Motion(), dur)
+    runs["schedule"] = analyze_drift(Site(0.0), imu, InitialErrors(), held, **kw)
     t = runs["fast"].t_cov
-    white = ErrorModel(Site(0.0), Layout(bias=False))
+    white = ErrorModel(Site(0.0), Layout(bias=False), vertical=vertical)
     alone = {"arw": white_noise_covariance(white, imu.arw, 0.0, t),
              "vrw": white_noise_covariance(white, 0.0, imu.vrw, t)}  # fmt: skip
 
@@ -465,3 +476,10 @@ def test_each_noise_source_has_its_own_covariance_on_both_engines():
             assert close(res.noise_cov[name], p), name
     for name in ("gyro_bias_instability", "accel_bias_instability"):
         assert close(runs["exact"].noise_cov[name], runs["fast"].noise_cov[name]), name
+        assert close(runs["schedule"].noise_cov[name], runs["fast"].noise_cov[name]), name
+    gm = {"gyro_bias_instability", "accel_bias_instability"}
+    for key, res in runs.items():
+        how = res.engine["noise"]
+        for name in res.noise_cov:
+            want = "steps" if key == "exact" else ("gauss-markov" if name in gm else "white")
+            assert how[name] == want, (key, name)
