@@ -805,8 +805,12 @@ def full(
         if survivors_only and (copy / "mutants").exists():
             # Rerun only what the last run did not kill (new tests, same mutants). mutmut
             # records which tests reach which function once, and later adds only tests
-            # with new names: forget the record, so that changed tests count too.
-            (copy / "mutants" / "mutmut-stats.json").unlink(missing_ok=True)
+            # with new names: forget the record if a test file changed since, so that
+            # changed tests count too.
+            stats = copy / "mutants" / "mutmut-stats.json"
+            newest = max(f.stat().st_mtime for f in (ROOT / "tests").glob("*.py"))
+            if stats.exists() and newest > stats.stat().st_mtime:
+                stats.unlink()
             names = [n for n, s in _statuses(copy, only).items() if s not in ("killed", "timeout")]
             print(f"rerunning the {len(names)} mutants in scope not killed last time")
         print(f"full mode: mutmut in {copy} ({jobs} children); this takes a while")
