@@ -483,3 +483,21 @@ def test_each_noise_source_has_its_own_covariance_on_both_engines(vertical):
         for name in res.noise_cov:
             want = "steps" if key == "exact" else ("gauss-markov" if name in gm else "white")
             assert how[name] == want, (key, name)
+
+
+def test_noise_budget_line_is_the_final_drms_however_small_and_the_output_grid_ends_at_the_end():
+    # Budget line of a noise source: sqrt(Var dr_E + Var dr_N) at the end, in nmi, also
+    # when it is far below a metre (a tiny VRW over ten minutes). Output grids: 0, h, 2h,
+    # ... and the duration itself unless the last multiple is within 1 us of it.
+    from inserr.drift.analysis import output_grid
+
+    res = analyze_drift(Site(0.0), ImuErrors(vrw=1e-8), InitialErrors(),
+                        Timeline.static(np.eye(3), 600.0), dt_cov=60.0)  # fmt: skip
+    p = res.noise_cov["vrw"][-1]
+    assert p[6, 6] + p[7, 7] < 1e-6
+    assert res.metrics["error_budget"]["vrw"] == pytest.approx(
+        math.sqrt(p[6, 6] + p[7, 7]) / NMI, rel=1e-12
+    )
+    assert np.array_equal(output_grid(3.0, 1.0), [0.0, 1.0, 2.0, 3.0])
+    assert np.array_equal(output_grid(10.5, 1.0), [*np.arange(11.0), 10.5])
+    assert np.array_equal(output_grid(10.0000005, 1.0), np.arange(11.0))
