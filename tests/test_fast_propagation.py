@@ -487,6 +487,267 @@ def test_history_period_is_the_common_period_of_table_and_vehicle():
     assert ScheduleHistory(flex, SWING, 7200.0).period() is None
 
 
+def _holds_on_the_swing():
+    """Isolation holds of 130 s (more than the 120 s swing) at targets 0, 0.3 rad, a full
+    turn and 0.3 rad plus a full turn, then an indexing turn with the yaw compensated;
+    stops and a half turn of the outer gimbal between them."""
+    from inserr.schemes.turntable import ScheduleBuilder
+
+    b = ScheduleBuilder()
+    for target in (0.0, 0.3, 2 * math.pi, 0.3 + 2 * math.pi):
+        a0 = float(SWING.heading_at(b.t)) - target  # level: IMU heading = H - a
+        b.isolate(130.0, target, a0, float(SWING.heading_at(b.t + 130.0)) - target)
+        b.stop(20.0)
+        b.rotate("outer", math.pi, 6 * DEG)
+    a0 = float(SWING.heading_at(b.t)) - 0.3
+    b.isolate(60.0, 0.3, a0, a0 - 60.0 * 2 * DEG, target_rate=2 * DEG, label="index")
+    b.stop(20.0)
+    return b.build()
+
+
+def _pieces_cases():
+    from inserr.schemes.vehicle_motion import Turn
+
+    mounting = sl.expm(np.array([[0.0, -0.35, -0.61], [0.35, 0.0, -0.87], [0.61, 0.87, 0.0]]))
+    tilted = Motion(heading=0.3, pitch=2 * DEG, roll=-3 * DEG)
+    turn = Turn(heading=0.2, pitch=3 * DEG, roll=2 * DEG, rate=0.5 * DEG)
+    # A heading history at rates changing every 13 s (one interval flat).
+    times = np.arange(0.0, 820.0, 13.0)
+    rates = np.random.default_rng(4).normal(size=len(times) - 1) * 0.3 * DEG
+    rates[5] = 0.0
+    headings = np.concatenate([[0.4], 0.4 + np.cumsum(rates * 13.0)])
+    history = HeadingHistory(pitch=2 * DEG, roll=1 * DEG, times=times, headings=headings)
+    from inserr.schemes.turntable import ScheduleBuilder
+
+    half_second = ScheduleBuilder()  # half-second turns between stops
+    for _ in range(4):
+        half_second.stop(20.0)
+        half_second.rotate("outer", 3 * DEG, 6 * DEG)
+        half_second.stop(20.0)
+        half_second.rotate("outer", -3 * DEG, 6 * DEG)
+    return {
+        "swing-two-position-mounted": (
+            build_scheme("two-position", 6 * DEG, 40.0, mounting=mounting).plan(SWING, 800.0),
+            SWING),
+        "swing-isolation-holds": (_holds_on_the_swing(), SWING),
+        "tilted-four-position": (build_scheme("four-position", 6 * DEG, 40.0).plan(tilted, 800.0),
+                                 tilted),
+        "tilted-heading-isolation": (
+            build_scheme("heading-isolation", 6 * DEG, 40.0).plan(tilted, 800.0), tilted),
+        "turn-two-position": (build_scheme("two-position", 6 * DEG, 40.0).plan(turn, 800.0), turn),
+        "history-two-position": (build_scheme("two-position", 6 * DEG, 40.0).plan(history, 800.0),
+                                 history),
+        "tilted-half-second-turns": (half_second.build(), tilted),
+    }  # fmt: skip
+
+
+@pytest.mark.parametrize("name", sorted(_pieces_cases()))
+def test_schedule_pieces_describe_the_attitude_they_cut(name):
+    # What the pieces tell the fast engine, against the attitude sampled inside each piece
+    # (19 interior times): `still` exactly where C_s^n does not change; `constant` (or
+    # still) exactly where w_ns^n does not change; the bandwidth about at least every
+    # |w_ns^n| (the vehicle bound plus the gimbal rate of a turn, the heading rate of an
+    # isolation); for a stop the table matrix C_s^b = C_b^n^T C_s^n; the phase classes
+    # (periodic vehicle): 0 for stops, the same class k >= 1 for isolation holds that
+    # are the same function of the vehicle phase (compared at equal phases), -1 else.
+    # Round-off of the sampled attitudes and rates: ~1e-15; differences that count are
+    # >= 1e-6 (a 0.5 deg/s turn over a second).
+    table, motion = _pieces_cases()[name]
+    dur = float(min(table.end, 800.0))
+    hist = ScheduleHistory(table, motion, dur)
+    pc = hist.pieces()
+    a, b = pc.breaks[:-1], pc.breaks[1:]
+    frac = np.linspace(0.05, 0.95, 19)
+    t = a[:, None] + frac[None, :] * (b - a)[:, None]
+    piece = np.repeat(np.arange(len(a)), len(frac))
+    c, w = hist.evaluate(t.ravel(), piece)
+    c = c.reshape(len(a), len(frac), 3, 3)
+    w = w.reshape(len(a), len(frac), 3)
+    c_still = np.abs(c - c[:, :1]).max(axis=(1, 2, 3)) < 1e-12
+    w_still = np.abs(w - w[:, :1]).max(axis=(1, 2)) < 1e-12
+    assert np.array_equal(pc.still, c_still)
+    assert np.array_equal(pc.constant | pc.still, w_still)
+    # (An isolation turn on a tilted vehicle turns 0.2 % faster than its heading rate,
+    # the stated bandwidth: the gimbal rate varies. The quadrature's points carry a
+    # larger margin than that; 1 % here.)
+    assert np.all(pc.bandwidth >= np.linalg.norm(w, axis=2).max(axis=1) * (1 - 1e-2))
+    seg = np.searchsorted(table.t0, 0.5 * (a + b), side="right") - 1
+    kind = np.array(table.kind)[seg]
+    gimbal = np.where(kind == "rotate", np.abs(table.rate[seg]), 0.0)
+    gimbal = np.where(kind == "isolate", np.abs(table.target_rate[seg]), gimbal)
+    assert np.allclose(pc.bandwidth, motion.rate_bound(a, b) + gimbal, rtol=1e-15, atol=0)
+    stop = kind == "stop"
+    c_bn = motion.attitude(t.ravel()).reshape(len(a), len(frac), 3, 3)
+    c_sb = np.swapaxes(c_bn, 2, 3) @ c
+    assert np.all(np.abs(pc.table[stop][:, None] - c_sb[stop]) < 1e-12)
+    assert np.all(np.isnan(pc.table[~stop]))
+    if motion.repeat_period() is None:
+        assert pc.vehicle_period is None and np.all(pc.phase_class == -1)
+        return
+    period = motion.repeat_period()
+    assert pc.vehicle_period == period
+    hold = (kind == "isolate") & (table.target_rate[seg] == 0.0)
+    assert np.all(pc.phase_class[stop] == 0) and np.all(pc.phase_class[~stop & ~hold] == -1)
+    assert np.all(pc.phase_class[hold] >= 1)
+    holds = np.flatnonzero(hold)
+    phase = np.linspace(1.0, period - 1.0, 9)
+    for i in holds:
+        for j in holds:
+            # The times of piece j at the phases of the first times of piece i.
+            ti = a[i] + 1.0 + phase
+            tj = ti + np.ceil((a[j] + 1.0 - ti) / period) * period
+            assert np.all(tj < b[j] - 1e-3)
+            ci, _ = hist.evaluate(ti, np.full(len(ti), i))
+            cj, _ = hist.evaluate(tj, np.full(len(tj), j))
+            same = np.abs(ci - cj).max() < 1e-9
+            assert same == (pc.phase_class[i] == pc.phase_class[j]), (i, j)
+    if name == "swing-isolation-holds":
+        assert len(set(pc.phase_class[holds])) == 2  # 0 = 2 pi, 0.3 = 0.3 + 2 pi
+
+
+_RATE = 6 * DEG  # table rate of the hand-built schedules below (half turn: 30 s)
+_TILTED = Motion(heading=0.3, pitch=2 * DEG, roll=-3 * DEG)
+
+
+def _cycles(builder, n, last=None, net=-math.pi, dwell=40.0):
+    """``n`` cycles of stop, outer half turn, stop, outer turn by ``net`` (140 s when
+    ``net`` is -180 deg); ``last(builder)`` replaces the last cycle's final turn."""
+    for i in range(n):
+        builder.stop(dwell, "A")
+        builder.rotate("outer", math.pi, _RATE)
+        builder.stop(40.0, "B")
+        if i == n - 1 and last is not None:
+            last(builder)
+        else:
+            builder.rotate("outer", net, _RATE)
+    return builder
+
+
+def _period_cases():
+    from inserr.schemes.turntable import ScheduleBuilder as B
+
+    def built(b, cycle):
+        return b.build(cycle=cycle)
+
+    def short_cycle():  # a cycle with half-second turns: 81 s
+        b = B()
+        for _ in range(3):
+            b.stop(40.0)
+            b.rotate("outer", 3 * DEG, _RATE)
+            b.stop(40.0)
+            b.rotate("outer", -3 * DEG, _RATE)
+        return b
+
+    def first_turn():  # a half-second turn, then the 140 s cycles
+        b = B()
+        b.rotate("outer", 3 * DEG, _RATE)
+        return _cycles(b, 3)
+
+    def isolation(targets):  # holds of the IMU heading at the given targets, then stops
+        b = B()
+        for target in targets:
+            b.isolate(50.0, target, 0.0, 0.0)
+            b.stop(40.0)
+        return b
+
+    def late_inner(b):  # the last turn by the inner gimbal
+        b.rotate("inner", -math.pi, _RATE)
+
+    def long_first_dwell():
+        b = B()
+        b.stop(300.0)
+        b.rotate("outer", math.pi, _RATE)
+        b.stop(40.0)
+        b.rotate("outer", -math.pi, _RATE)
+        return b
+
+    def shorter(eps):  # the last turn eps shorter (same rate): it ends eps * rate short
+        return lambda b: b.rotate("outer", -math.pi * (1 - eps / 30.0), _RATE)
+
+    def faster(eps):  # the last turn at a rate 1 + eps faster, over the same 30 s
+        return lambda b: b.rotate("outer", -math.pi * (1 + eps), _RATE * (1 + eps))
+
+    # name: (schedule, duration, expected (t0, P) or None)
+    return {
+        "cycles": (built(_cycles(B(), 3), 140.0), 420.0, (0.0, 140.0)),
+        "half-second-turns": (built(short_cycle(), 81.0), 243.0, (0.0, 81.0)),
+        "first-turn-then-cycles": (built(first_turn(), 140.0), 420.5, (0.5, 140.0)),
+        "a-full-turn-per-cycle": (built(_cycles(B(), 3, net=math.pi), 140.0), 420.0, (0.0, 140.0)),
+        "creeping-45-deg-per-cycle": (
+            built(_cycles(B(), 3, net=-135 * DEG), 132.5), 397.5, None),
+        "declared-cycle-half-a-second-off": (
+            built(_cycles(B(), 3, dwell=40.5), 140.0), 421.0, None),
+        "segments-end-after-two-cycles": (built(_cycles(B(), 2), 140.0), 420.0, None),
+        "last-turn-0.5-s-short": (built(_cycles(B(), 3, shorter(0.5)), 140.0), 420.0, None),
+        "last-turn-5e-9-s-short": (built(_cycles(B(), 3, shorter(5e-9)), 140.0), 420.0, None),
+        "last-turn-faster-by-5e-8": (built(_cycles(B(), 3, faster(5e-8)), 140.0), 420.0, None),
+        "last-turn-by-the-inner-gimbal-at-the-end": (
+            built(_cycles(B(), 3, late_inner), 140.0), 390.5, None),
+        "isolation-holds-at-other-headings": (
+            built(isolation([0.0, 45 * DEG, 0.0, 45 * DEG]), 90.0), 360.0, None),
+        "first-dwell-longer-than-the-run-leaves": (built(long_first_dwell(), 140.0), 420.0, None),
+    }  # fmt: skip
+
+
+@pytest.mark.parametrize("name", sorted(_period_cases()))
+def test_history_period_is_found_exactly_when_the_attitude_repeats(name):
+    # Truth from the attitude itself: C_s^n(t + P) = C_s^n(t) for every t in [t0, D - P]
+    # (sampled every 0.25 s and at the ends, with the table's angles and the vehicle's
+    # attitude, not the history's evaluation). Periodic schedules must be found (the
+    # engine then computes one period); near misses (a turn 5e-9 s short, a rate 5e-8
+    # faster, a cycle creeping by 45 deg, a declared cycle 0.5 s off, isolation holds at
+    # other headings, a mismatch in the last half second) must not be taken for periodic.
+    # The near misses differ by >= 5e-10 rad somewhere; the comparison's round-off is
+    # ~1e-15.
+    table, dur, expected = _period_cases()[name]
+
+    def attitude(t):
+        return _TILTED.attitude(t) @ table.dcm_at(t, _TILTED)
+
+    def mismatch(t0, p):
+        t = np.concatenate([np.arange(t0, dur - p, 0.25), [dur - p]])
+        return float(np.abs(attitude(t + p) - attitude(t)).max())
+
+    found = ScheduleHistory(table, _TILTED, dur).period()
+    assert found == (pytest.approx(expected) if expected else None)
+    if expected is None:
+        # The schedule does not repeat with its declared cycle after 0 nor after its
+        # first segment (or no whole cycle fits after it).
+        for t0 in (0.0, float(table.t0[1])):
+            assert t0 + table.cycle > dur or mismatch(t0, table.cycle) > 4e-10
+    else:
+        assert mismatch(*found) < 1e-13
+
+
+def test_history_period_needs_two_periods_and_a_commensurate_vehicle():
+    # The "none" scheme repeats with the vehicle (its least period), or with an hour on a
+    # static base; two-position (1320 s cycle) needs two cycles in the run (2640 s)
+    # and a vehicle period commensurate with its cycle (100 sqrt 2 s is not).
+    none = build_scheme("none", 6 * DEG, 300.0)
+    assert ScheduleHistory(none.plan(SWING, 7200.0), SWING, 7200.0).period() == (0.0, 120.0)
+    assert ScheduleHistory(none.plan(Motion(), 7200.0), Motion(), 7200.0).period() == (0.0, 3600.0)
+    two = build_scheme("two-position", 6 * DEG, 300.0)
+    for dur, expected in ((2640.0, (0.0, 1320.0)), (3300.0, (0.0, 1320.0)), (2639.0, None)):
+        assert ScheduleHistory(two.plan(Motion(), dur), Motion(), dur).period() == expected
+    odd = YawSwing(amplitude=6 * DEG, period=100.0 * math.sqrt(2.0))
+    assert ScheduleHistory(two.plan(odd, 7200.0), odd, 7200.0).period() is None
+
+
+def test_common_period_is_the_least_common_multiple_within_the_search():
+    from inserr.schemes.composition import _common_period
+
+    # p a = q b with the smallest p: 120 s and 240 s meet at 240 s (q = 1), 3 s and 7 s
+    # at 21 s; periods equal to 1e-9 count as equal (1e-10 off still meets, relative
+    # to p a); the search stops at p = 1000 (999 s and 1000 s meet at p = 1000, 1000 s and
+    # 1001 s would need p = 1001).
+    assert _common_period(120.0, 240.0) == 240.0
+    assert _common_period(120.0 * (1 + 1e-11), 240.0) == pytest.approx(240.0, rel=1e-10)
+    assert _common_period(3.0, 7.0 * (1 + 1e-10)) == 21.0
+    assert _common_period(999.0, 1000.0) == 999000.0
+    assert _common_period(1000.0, 1001.0) is None
+    assert _common_period(1.0, math.sqrt(2.0)) is None
+
+
 @pytest.mark.parametrize(
     "scheme", ["heading-isolation", "four-position-modified", "nulling-two-position"]
 )
@@ -514,6 +775,144 @@ def test_static_schedule_equals_the_step_engine_on_its_timeline(scheme):
         _relative(fast.source_horizontal.reshape(n, -1), exact.source_horizontal.reshape(n, -1))
         < 3e-7
     )
+
+
+@pytest.mark.parametrize(
+    ("scheme", "motion", "dt_out", "paths"),
+    [("two-position", SWING, 1.0, {"states-grid", "cached-aligned"}),
+     ("two-position", SWING, 7.0, {"fine-each", "states-each", "cached-anywhere"}),
+     ("nulling-two-position", SWING, 1.0, {"fine-grid", "cached-blocks", "partial-table"}),
+     ("four-position", Motion(), 1.0, {"fine-grid", "rotation-grid"}),
+     ("four-position", Motion(), 7.0, {"fine-each", "states-each", "rotation-each"})],
+)  # fmt: skip
+def test_engine_takes_the_faster_paths_where_they_apply(scheme, motion, dt_out, paths):
+    # The faster ways change only the work, so the numbers cannot show them: the engine
+    # reports them. Where each must be taken: a periodic history (two-position: 4 (300
+    # + 30) = 1320 s, 11 swings; the 1 s and 60 s grids divide it) is computed for one
+    # period and copied (3 periods in the hour, the last one cut), unless the fine step
+    # does not divide the period (7 s: 7 periods would be needed); stops on the periodic
+    # swing reuse the vehicle part per phase, on a step that divides the swing period
+    # and the coarse step, is a multiple of the fine step when it can be, and keeps a
+    # window's phase within MAX_PHASE; outputs on a uniform grid are one product per
+    # window shape; a static base needs no sampled window at all (stops and turns in
+    # closed form).
+    dur = 3600.0
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(motion, dur), motion, dur)
+    res = analyze_drift(SITE, IMU, INIT, hist, dt_out=dt_out, dt_cov=60.0)
+    win, taken = res.engine["windows"], set(res.engine["paths"])
+    assert paths <= taken, taken
+    if scheme == "two-position" and dt_out == 1.0:
+        assert win["lift_period"] == 1320.0 and win["periods"] == 3
+    else:
+        assert win["lift_period"] == 0.0 and win["periods"] == 0
+    if motion is SWING:
+        step = win["phase_step"]
+        assert _is_whole(120.0 / step) and _is_whole(60.0 / step)
+        assert _is_whole(step / dt_out) == (dt_out == 1.0)
+        fastest = float(np.max(np.abs(NavModes(ErrorModel(SITE)).lam)))
+        bandwidth = float(SWING.rate_bound(np.zeros(1), np.ones(1))[0])
+        assert step * (2 * bandwidth + fastest) <= fp.MAX_PHASE
+        assert win["cached"] > 0 and win["still"] == win["rotation"] == 0
+    else:
+        assert win["phase_step"] == 0.0 and win["cached"] == win["partial"] == 0
+        assert win["direct"] == 0 and win["still"] > 0 and win["rotation"] > 0
+        # One attitude evaluation per still or turning window (closed forms).
+        assert res.engine["nodes"] == win["still"] + win["rotation"]
+    if dt_out == 7.0:  # the step engine reports nothing
+        still = Timeline.static(np.eye(3), 600.0)
+        assert analyze_drift(SITE, IMU, INIT, still, dt_out=60.0, engine="exact").engine == {}
+    # The paths agree with each other: the 1 s and 7 s outputs at their common times.
+    if dt_out == 7.0:
+        ones = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+        common = np.isin(ones.t, res.t)
+        assert _relative(res.nav[np.isin(res.t, ones.t)], ones.nav[common]) < 1e-11
+
+
+@pytest.mark.parametrize("bandwidth", [0.05, 0.3, 1.2])
+@pytest.mark.parametrize("dt_coarse, dt_fine", [(60.0, 1.0), (60.0, 7.0), (45.0, 1.0),
+                                                (120.0, 1.0), (60.0, None)])  # fmt: skip
+def test_phase_step_is_the_longest_within_the_phase_budget_among_the_best_aligned(
+    bandwidth, dt_coarse, dt_fine
+):
+    # The documented choice, checked as properties of the returned step g = P / m (P the
+    # 120 s vehicle period): g keeps a window's phase (2 bandwidth + fastest mode) g
+    # within MAX_PHASE; no step P / m' within the budget is better aligned (dividing the
+    # coarse step counts first, being a multiple of the fine step second); none as well
+    # aligned is longer. Pieces without phase classes, without a vehicle period, or with
+    # nothing cacheable (all still or constant-rate) get no step.
+    from inserr.model.attitude_history import Pieces
+
+    period, fastest = 120.0, 1.24e-3
+    n = 4
+    pieces = Pieces(np.arange(n + 1) * 30.0, np.full(n, bandwidth), np.zeros(n, bool),
+                    np.full((n, 3, 3), np.nan), period, None, np.zeros(n, int))  # fmt: skip
+    t_coarse = np.arange(0.0, 3600.0 + dt_coarse / 2, dt_coarse)
+    g = fp.phase_step(pieces, t_coarse, dt_fine, fastest)
+    m = round(period / g)
+    assert _is_whole(period / g) and m >= 1
+    rate = 2 * bandwidth + fastest
+    assert g * rate <= fp.MAX_PHASE
+
+    def score(step):
+        fine = dt_fine is not None and _is_whole(step / dt_fine) and step >= dt_fine
+        return 2 * int(_is_whole(dt_coarse / step)) + int(fine)
+
+    for m2 in range(1, m + 400):
+        g2 = period / m2
+        if g2 * rate <= fp.MAX_PHASE:
+            assert score(g2) < score(g) or (score(g2) == score(g) and g2 <= g), (m2, g2)
+    for change in ({"phase_class": None}, {"vehicle_period": None},
+                   {"still": np.ones(n, bool)}, {"constant": np.ones(n, bool)}):  # fmt: skip
+        other = dataclasses.replace(pieces, **change)
+        assert fp.phase_step(other, t_coarse, dt_fine, fastest) is None
+
+
+def test_grid_step_recognises_uniform_grids_from_zero():
+    # 0, h, 2h, ... with a shorter last step is a grid of step h; anything else is not.
+    assert fp._grid_step(np.array([0.0, 1.0, 2.0, 3.0])) == 1.0
+    assert fp._grid_step(np.array([0.0, 1.0, 2.0, 2.5])) == 1.0
+    assert fp._grid_step(np.array([0.0, 60.0])) == 60.0
+    assert fp._grid_step(np.array([0.0, 1.0, 1.5])) == 1.0
+    for t in ([0.0], [1.0, 2.0, 3.0], [0.0, 1.0, 2.5, 3.0], [0.0, 1.0, 2.0, 3.5, 4.0],
+              [0.0, 1.0, 2.000001, 3.0], [0.0, 1.0, 2.0 + 5e-9, 3.0]):  # fmt: skip
+        assert fp._grid_step(np.array(t)) is None, t
+
+
+def test_lifting_needs_two_whole_periods_after_the_start():
+    # Two-position on the swing repeats every 1320 s: lifted from exactly two periods
+    # on. A static table whose 140 s cycle starts after a 60 s stop repeats from 60 s;
+    # both grids (1 s, 60 s) divide 3 cycles, 420 s, so the run needs 60 + 2 x 420 s.
+    from inserr.schemes.turntable import ScheduleBuilder
+
+    two = build_scheme("two-position", 6 * DEG, 300.0)
+    for dur, expected in ((2640.0, (0.0, 1320.0)), (2580.0, None)):
+        hist = ScheduleHistory(two.plan(SWING, dur), SWING, dur)
+        assert fp._lifting(hist, output_grid(dur, 1.0), output_grid(dur, 60.0)) == expected
+    b = ScheduleBuilder()
+    b.stop(60.0)
+    table = _cycles(b, 7).build(cycle=140.0)
+    for dur, expected in ((900.0, (60.0, 420.0)), (840.0, None)):
+        hist = ScheduleHistory(table, Motion(), dur)
+        assert hist.period() == (60.0, 140.0)
+        assert fp._lifting(hist, output_grid(dur, 1.0), output_grid(dur, 60.0)) == expected
+
+
+def test_drift_analysis_defaults_are_one_second_outputs_one_minute_budget_one_second_steps():
+    # Documented defaults: dt_out 1 s, dt_cov 60 s, and the step engine cuts continuous
+    # motion into 1 s sub-steps (the same numbers as asking for 1 s).
+    dur = 600.0
+    hist = ScheduleHistory(build_scheme("two-position", 6 * DEG, 120.0).plan(SWING, dur), SWING,
+                           dur)  # fmt: skip
+    res = analyze_drift(SITE, IMU, INIT, hist)
+    assert np.array_equal(res.t, np.arange(0.0, dur + 0.5, 1.0))
+    assert np.array_equal(res.t_cov, np.arange(0.0, dur + 30.0, 60.0))
+    kw = dict(dt_out=60.0, engine="exact")
+    assert np.array_equal(analyze_drift(SITE, IMU, INIT, hist, **kw).nav,
+                          analyze_drift(SITE, IMU, INIT, hist, substep=1.0, **kw).nav)  # fmt: skip
+
+
+def _is_whole(x: float) -> bool:
+    return abs(x - round(x)) < 1e-9
 
 
 def test_fine_blocks_cover_the_outputs_and_depend_on_their_count_only():

@@ -278,3 +278,75 @@ def test_position_error_initial_condition_keeps_phi():
     x = unit_column(model, Source("initial_position_e", "initial_position", 10.0), np.eye(3)) * 10.0
     assert np.allclose(attitude_error(site, x[:9]), 0.0, atol=1e-18)
     assert x[DR][0] == 10.0
+
+
+def test_imu_transform_resolves_every_error_block_in_the_imu_frame():
+    # Built by hand: IMU-frame biases b resolved in n are C b, error matrices K are
+    # C K C^T (vec row-major); T must take them back to b and K, every block, and leave
+    # the navigation states alone.
+    model = ErrorModel(
+        Site.from_degrees(34.0),
+        Layout(bias=True, scale_misalignment=True, bias_instability=True),
+    )
+    lay = model.layout
+    rng = np.random.default_rng(3)
+    c = sl.expm(np.cross(np.eye(3), rng.normal(size=3)))  # a random rotation C_s^n
+    x, want = np.zeros(lay.n), np.zeros(lay.n)
+    x[:9] = want[:9] = rng.normal(size=9)
+    for key in ("eps", "nabla", "bg", "ba"):
+        b = rng.normal(size=3)
+        x[lay[key]], want[lay[key]] = c @ b, b
+    for key in ("kg", "ka"):
+        k = rng.normal(size=(3, 3))
+        x[lay[key]], want[lay[key]] = (c @ k @ c.T).ravel(), k.ravel()
+    assert np.allclose(model.imu_transform(c) @ x, want, rtol=0, atol=1e-12)
+
+
+def test_noise_intensity_and_attitude_error_of_augmented_states():
+    # White-noise PSDs: ARW^2 (gyro), VRW^2 (accelerometer), 2 sigma^2 / tau per
+    # Gauss-Markov bias, none by default. phi reads the first nine states of a longer
+    # state (psi + dtheta with dtheta = [-dr_N / R_M, dr_E / R_N, dr_E tan L / R_N]).
+    site = Site.from_degrees(34.0)
+    model = ErrorModel(site, gyro_correlation_time=100.0, accel_correlation_time=50.0)
+    q = np.diag(model.noise_intensity(2e-6, 3e-5))
+    assert np.array_equal(q, np.repeat([4e-12, 9e-10, 0.0, 0.0], 3))
+    q = np.diag(model.noise_intensity(2e-6, 3e-5, 1e-7, 2e-4))
+    assert np.allclose(q, np.repeat([4e-12, 9e-10, 2e-14 / 100.0, 8e-8 / 50.0], 3), rtol=1e-15)
+    x = np.zeros(15)
+    x[:3] = [1e-6, -2e-6, 3e-6]
+    x[6:8] = [100.0, -50.0]
+    x[9:] = 7.0  # augmented states: not read
+    tan = math.tan(math.radians(34.0))
+    want = [1e-6 + 50.0 / site.r_m, -2e-6 + 100.0 / site.r_n, 3e-6 + 100.0 * tan / site.r_n]
+    assert np.allclose(attitude_error(site, x), want, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("vertical", ["clamped", "free"])
+def test_coupled_exo_is_the_input_block_times_the_exo_exponential(vertical):
+    # Its definition: B(w) expm(E(w) s), with B the nav-by-exo block and E the exo block
+    # of the model's own matrix, the exponential by scipy; every exo kind, both vertical
+    # modes (clamped: no dv_U rows), two rates and three times at once.
+    model = ErrorModel(
+        Site.from_degrees(34.0),
+        Layout(bias=True, scale_misalignment=True, bias_instability=True),
+        vertical=vertical,
+        gyro_correlation_time=300.0,
+        accel_correlation_time=200.0,
+    )
+    w = np.array([[0.0, 0.0, 0.0], [0.02, -0.05, 0.1]])
+    s = np.array([0.0, 7.5, 40.0])
+    got = model.coupled_exo(w, s)
+    assert got.shape == (2, 3, 9, model.layout.n - 9)
+    for k in range(2):
+        a = model.matrix(w[k])
+        b, e = a[:9, 9:], a[9:, 9:]
+        for j in range(3):
+            want = b @ sl.expm(e * s[j])
+            assert np.allclose(got[k, j], want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+    assert np.any(got[..., 5, :] != 0.0) == (vertical == "free")
+    # One rate and one time given as (3,) and a float: the same, shaped (1, 1, ...).
+    assert np.array_equal(model.coupled_exo(w[1], 7.5), got[1:2, 1:2])
+    e_s = model.exo_transition(w[1], 7.5)
+    assert e_s.shape == (1, 1, model.layout.n - 9, model.layout.n - 9)
+    want = sl.expm(model.matrix(w[1])[9:, 9:] * 7.5)
+    assert np.allclose(e_s[0, 0], want, rtol=1e-12, atol=1e-13)

@@ -433,3 +433,71 @@ def test_alignment_truth_noise_factor_is_a_square_root_of_qd():
     lf = _noise_factor(qd)
     assert np.linalg.matrix_rank(qd, tol=1e-6 * np.abs(qd).max()) < len(qd)  # singular
     assert np.allclose(lf @ lf.T, qd, rtol=0, atol=1e-10 * np.abs(qd).max())
+
+
+@pytest.mark.parametrize("vertical", ["clamped", "free"])
+def test_each_noise_source_has_its_own_covariance_on_both_engines(vertical):
+    # One propagation per noise source: with ARW, VRW and both Gauss-Markov biases in
+    # the budget, the ARW entry is the white-noise covariance of the ARW alone and the
+    # VRW entry that of the VRW alone (closed forms, fast_propagation.white_noise_
+    # covariance), and each Gauss-Markov entry is the same on the step engine (augmented
+    # states, Van Loan) as on the fast one (its own closed form). Both exact: 1e-7 of
+    # the largest entry of each block, the step engine's accumulated round-off. The
+    # free vertical channel (its own modes) too, over half an hour; the fast engine on a
+    # schedule held still gives the same as on its timeline. Each result says how it
+    # was computed.
+    from inserr.model.fast_propagation import white_noise_covariance
+    from inserr.schemes.catalogue import build_scheme
+    from inserr.schemes.composition import ScheduleHistory
+    from inserr.schemes.vehicle_motion import Motion
+
+    imu = ImuErrors(arw=0.002 * DEG_PER_SQRT_HOUR, vrw=20 * MICRO_G,
+                    gyro_bias_instability=0.01 * DEG_PER_HOUR, gyro_correlation_time=900.0,
+                    accel_bias_instability=30 * MICRO_G, accel_correlation_time=600.0)  # fmt: skip
+    dur = 7200.0 if vertical == "clamped" else 1800.0
+    tl = Timeline.static(np.eye(3), dur)
+    kw = dict(dt_cov=600.0, vertical=vertical)
+    runs = {e: analyze_drift(Site(0.0), imu, InitialErrors(), tl, engine=e, **kw)
+            for e in ("fast", "exact")}  # fmt: skip
+    held = ScheduleHistory(build_scheme("none", 0.1, 60.0).plan(Motion(), dur), Motion(), dur)
+    runs["schedule"] = analyze_drift(Site(0.0), imu, InitialErrors(), held, **kw)
+    t = runs["fast"].t_cov
+    white = ErrorModel(Site(0.0), Layout(bias=False), vertical=vertical)
+    alone = {"arw": white_noise_covariance(white, imu.arw, 0.0, t),
+             "vrw": white_noise_covariance(white, 0.0, imu.vrw, t)}  # fmt: skip
+
+    def close(a, b):
+        return np.allclose(a, b, rtol=0, atol=1e-7 * np.abs(b).max())
+
+    for res in runs.values():
+        assert set(res.noise_cov) == {"arw", "vrw", "gyro_bias_instability",
+                                      "accel_bias_instability"}  # fmt: skip
+        for name, p in alone.items():
+            assert close(res.noise_cov[name], p), name
+    for name in ("gyro_bias_instability", "accel_bias_instability"):
+        assert close(runs["exact"].noise_cov[name], runs["fast"].noise_cov[name]), name
+        assert close(runs["schedule"].noise_cov[name], runs["fast"].noise_cov[name]), name
+    gm = {"gyro_bias_instability", "accel_bias_instability"}
+    for key, res in runs.items():
+        how = res.engine["noise"]
+        for name in res.noise_cov:
+            want = "steps" if key == "exact" else ("gauss-markov" if name in gm else "white")
+            assert how[name] == want, (key, name)
+
+
+def test_noise_budget_line_is_the_final_drms_however_small_and_the_output_grid_ends_at_the_end():
+    # Budget line of a noise source: sqrt(Var dr_E + Var dr_N) at the end, in nmi, also
+    # when it is far below a metre (a tiny VRW over ten minutes). Output grids: 0, h, 2h,
+    # ... and the duration itself unless the last multiple is within 1 us of it.
+    from inserr.drift.analysis import output_grid
+
+    res = analyze_drift(Site(0.0), ImuErrors(vrw=1e-8), InitialErrors(),
+                        Timeline.static(np.eye(3), 600.0), dt_cov=60.0)  # fmt: skip
+    p = res.noise_cov["vrw"][-1]
+    assert p[6, 6] + p[7, 7] < 1e-6
+    assert res.metrics["error_budget"]["vrw"] == pytest.approx(
+        math.sqrt(p[6, 6] + p[7, 7]) / NMI, rel=1e-12
+    )
+    assert np.array_equal(output_grid(3.0, 1.0), [0.0, 1.0, 2.0, 3.0])
+    assert np.array_equal(output_grid(10.5, 1.0), [*np.arange(11.0), 10.5])
+    assert np.array_equal(output_grid(10.0000005, 1.0), np.arange(11.0))

@@ -57,6 +57,31 @@ def test_engine_equals_naive_expm_chain():
     ref = np.array(ref)
     # Same exact transition, different grouping (powers vs single steps): roundoff only.
     assert np.allclose(got, ref, rtol=1e-10, atol=1e-14)
+    # By default the nine navigation states are recorded, of one state or of many.
+    nav = propagate_states(Discretizer(model), tl, x0, t_out)
+    assert nav.shape == (len(t_out), 9, 3) and np.allclose(nav, ref[:, :9], rtol=1e-10, atol=1e-14)
+    one = propagate_states(Discretizer(model), tl, x0[:, 1], t_out)
+    assert one.shape == (len(t_out), 9) and np.allclose(one, ref[:, :9, 1], rtol=1e-10, atol=1e-14)
+    # Several grids in one pass, none starting at 0: a uniform one from 30 s (runs of
+    # equal steps), the timeline's own nodes (steps of different lengths), one empty;
+    # index arrays for rows and columns.
+    from inserr.model.exact_propagation import Output, propagate_outputs
+
+    later = np.flatnonzero(t_out >= 30.0)
+    nodes = np.array([100.0, 115.0, 152.5])
+    rows, cols = np.array([6, 7, 0]), np.array([2, 0])
+    a, b, empty = propagate_outputs(
+        Discretizer(model), tl, x0,
+        [Output(t_out[later], rows, cols), Output(nodes, slice(0, 9), slice(1, 2)),
+         Output(np.array([]))],
+    )  # fmt: skip
+    assert np.allclose(a, ref[later][:, rows][:, :, cols], rtol=1e-10, atol=1e-14)
+    at_nodes = np.array([ref[np.flatnonzero(np.isclose(t_out, t))[0]] for t in nodes[:2]])
+    assert np.allclose(b[:2], at_nodes[:, :9, 1:2], rtol=1e-10, atol=1e-14)
+    assert empty.shape == (0, 9, 3)
+    noisy = Discretizer(model, model.noise_intensity(1e-6, 1e-5))
+    none = propagate_covariance(noisy, tl, np.eye(model.layout.n), np.array([]))
+    assert none.shape == (0, model.layout.n, model.layout.n)
 
 
 def test_exostates_follow_the_imu_attitude():
@@ -205,7 +230,8 @@ def test_results_do_not_depend_on_cache_history():
 
 
 @pytest.mark.parametrize(
-    "t_out", [[0.0, 50.0, 50.0, 100.0], [0.0, 50.0, 150.0], [10.0, 5.0], [0.0, np.nan]]
+    "t_out",
+    [[0.0, 50.0, 50.0, 100.0], [0.0, 50.0, 150.0], [10.0, 5.0], [0.0, np.nan], [-1.0, 0.0, 50.0]],
 )
 def test_bad_output_grids_are_refused_not_extrapolated(t_out):
     # A duplicate time used to leave its row uninitialised; a time past the end was
@@ -214,6 +240,19 @@ def test_bad_output_grids_are_refused_not_extrapolated(t_out):
     tl = Timeline.static(np.eye(3), 100.0)
     with pytest.raises(ValueError, match="output times"):
         propagate_states(Discretizer(model), tl, np.zeros(model.layout.n), np.array(t_out))
+
+
+def test_steps_end_at_every_timeline_node_and_output_time_by_default():
+    # make_steps' default uses the timeline: every step lies inside one interval, so the
+    # steps end at the nodes and at the output times; without it, at the outputs only.
+    from inserr.model.exact_propagation import make_steps
+
+    tl = _stop_and_turn_timeline()
+    t_out = np.array([0.0, 50.0, 120.0, 167.5])
+    ends = np.cumsum(make_steps(tl, t_out).dt)
+    assert np.allclose(ends, [50.0, 100.0, 115.0, 120.0, 152.5, 167.5], rtol=0, atol=1e-9)
+    plain = np.cumsum(make_steps(tl, t_out, use_omega=False).dt)
+    assert np.allclose(plain, [50.0, 120.0, 167.5], rtol=0, atol=1e-9)
 
 
 def test_cycle_integrals_accept_a_motion_that_does_not_move():

@@ -757,15 +757,19 @@ def _mutmut(copy: Path, *args: str, timeout: float | None = None) -> tuple[int, 
     return _run([sys.executable, "-c", code], copy, timeout)
 
 
-def _statuses(copy: Path) -> dict[str, str]:
-    """mutmut's verdict of every mutant in :data:`FULL_SCOPE` ("killed", "survived", ...)."""
+def _statuses(copy: Path, only: list[str] | None = None) -> dict[str, str]:
+    """mutmut's verdict of every mutant in :data:`FULL_SCOPE` ("killed", "survived", ...),
+    restricted to the names matching one of ``only`` when given."""
     code, out, _ = _mutmut(copy, "results", "--all", "true")
     status: dict[str, str] = {}
     for line in out.splitlines():
         name, sep, verdict = line.strip().rpartition(": ")
         if sep and name.startswith("inserr."):
             status[name] = verdict.strip()
-    return {n: s for n, s in status.items() if any(fnmatch.fnmatch(n, p) for p in FULL_SCOPE)}
+    scope = {n: s for n, s in status.items() if any(fnmatch.fnmatch(n, p) for p in FULL_SCOPE)}
+    if only:
+        scope = {n: s for n, s in scope.items() if any(fnmatch.fnmatch(n, p) for p in only)}
+    return scope
 
 
 def full(
@@ -774,6 +778,7 @@ def full(
     keep: bool,
     survivors_only: bool = False,
     score_only: bool = False,
+    only: list[str] | None = None,
 ) -> float:
     try:
         import mutmut  # noqa: F401
@@ -781,6 +786,7 @@ def full(
         sys.exit("mutation: the full mode needs mutmut (pip install '.[test]')")
     own = workdir is None
     work = Path(tempfile.mkdtemp(prefix="inserr-mutmut-")) if own else workdir
+    work.mkdir(parents=True, exist_ok=True)
     try:
         copy = work / "tree"
         if not copy.exists():
@@ -794,10 +800,18 @@ def full(
                 elif src.exists():
                     shutil.copy2(src, dst)
         _check_no_pyins(copy)
-        names = list(FULL_SCOPE)
+        # --mutants: a part of the core (e.g. one module), scored on its own.
+        names = list(only) if only else list(FULL_SCOPE)
         if survivors_only and (copy / "mutants").exists():
-            # Rerun only what the last run did not kill (new tests, same mutants).
-            names = [n for n, s in _statuses(copy).items() if s not in ("killed", "timeout")]
+            # Rerun only what the last run did not kill (new tests, same mutants). mutmut
+            # records which tests reach which function once, and later adds only tests
+            # with new names: forget the record if a test file changed since, so that
+            # changed tests count too.
+            stats = copy / "mutants" / "mutmut-stats.json"
+            newest = max(f.stat().st_mtime for f in (ROOT / "tests").glob("*.py"))
+            if stats.exists() and newest > stats.stat().st_mtime:
+                stats.unlink()
+            names = [n for n, s in _statuses(copy, only).items() if s not in ("killed", "timeout")]
             print(f"rerunning the {len(names)} mutants in scope not killed last time")
         print(f"full mode: mutmut in {copy} ({jobs} children); this takes a while")
         code, out, secs = 0, "", 0.0
@@ -807,7 +821,7 @@ def full(
         if code != 0:
             print(out[-3000:])
             sys.exit(f"mutation: mutmut run failed (exit {code})")
-        in_scope = _statuses(copy)
+        in_scope = _statuses(copy, only)
         equivalents = load_equivalents()
 
         def is_equivalent(name: str) -> bool:
@@ -863,6 +877,13 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="full, with --workdir of an earlier run: rerun only the mutants it did not kill",
     )
+    ap.add_argument(
+        "--mutants",
+        nargs="+",
+        metavar="PATTERN",
+        help="full: only the mutants whose names match these patterns, e.g. "
+        "'inserr.schemes.composition.*' (one module); the score is over them only",
+    )
     args = ap.parse_args(argv)
     if args.list:
         for m in QUICK:
@@ -872,7 +893,14 @@ def main(argv: list[str] | None = None) -> int:
     if args.quick:
         quick(max(1, args.jobs), args.only)
     else:
-        full(max(1, args.jobs), args.workdir, args.keep, args.survivors_only, args.score_only)
+        full(
+            max(1, args.jobs),
+            args.workdir,
+            args.keep,
+            args.survivors_only,
+            args.score_only,
+            args.mutants,
+        )
     return 0
 
 

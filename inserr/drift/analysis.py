@@ -74,6 +74,14 @@ class DriftResult:
         ``accel_bias_instability``; only the non-zero ones).
     metrics : dict
         Headline numbers (see :func:`headline`).
+    engine : dict
+        How the results were computed. The fast engine's constant errors: ``windows``
+        (quadrature windows by kind, lifted periods, lift period and phase step;
+        :class:`~inserr.model.fast_propagation.ConstantErrorResponse`), ``paths`` (the
+        faster ways taken, sorted) and ``nodes`` (attitude evaluations). Each noise
+        source (when there is noise): ``noise[name]`` is ``"white"`` (closed form),
+        ``"gauss-markov"`` (the fast engine's modal form) or ``"steps"`` (the
+        step-by-step covariance propagation).
 
     The derived curves (:attr:`horizontal`, :attr:`rms_horizontal`,
     :attr:`worst_horizontal`, :attr:`noise_horizontal_sigma`) are computed on first
@@ -89,6 +97,7 @@ class DriftResult:
     source_heading: np.ndarray
     noise_cov: dict[str, np.ndarray]
     metrics: dict = field(default_factory=dict)
+    engine: dict = field(default_factory=dict)
 
     @cached_property
     def horizontal(self) -> np.ndarray:
@@ -212,6 +221,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
     t_cov = output_grid(duration, dt_cov)
     sources = constant_sources(imu, init, vertical)
     model = ErrorModel(site, layout_for(imu.without_noise()), vertical=vertical)
+    engine_info: dict = {}
 
     def timeline() -> Timeline:
         if isinstance(history, Timeline):
@@ -222,6 +232,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
         if engine == "fast":
             hist = TimelineHistory(history) if isinstance(history, Timeline) else history
             resp = constant_error_response(model, hist, source_set(model, sources), t, t_cov)
+            engine_info.update(windows=resp.windows, paths=sorted(resp.paths), nodes=resp.nodes)
             return resp.fine, resp.coarse
         tl = timeline()
         disc = discretizer_for(model)
@@ -239,6 +250,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
 
     def noise() -> dict[str, np.ndarray]:
         noise_cov: dict[str, np.ndarray] = {}
+        how: dict[str, str] = {}
         for name, (arw, vrw, gbi, abi) in _noise_runs(imu).items():
             nmodel = ErrorModel(
                 site,
@@ -250,6 +262,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
             if engine == "fast" and not nmodel.layout.bias_instability:
                 # White noise is isotropic: its covariance does not depend on the attitude.
                 noise_cov[name] = white_noise_covariance(nmodel, arw, vrw, t_cov)
+                how[name] = "white"
                 continue
             if engine == "fast":
                 # A Gauss-Markov bias is seen through the attitude history.
@@ -263,6 +276,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
                 noise_cov[name] = gauss_markov_covariance(
                     nav_model, hist, sigma, tau, sensor, t_cov
                 )
+                how[name] = "gauss-markov"
                 continue
             ndisc = discretizer_for(nmodel, nmodel.noise_intensity(arw, vrw, gbi, abi))
             p0 = np.zeros((nmodel.layout.n,) * 2)
@@ -270,7 +284,9 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
                 p0[nmodel.layout["bg"], nmodel.layout["bg"]] = gbi**2 * np.eye(3)
                 p0[nmodel.layout["ba"], nmodel.layout["ba"]] = abi**2 * np.eye(3)
             noise_cov[name] = propagate_covariance(ndisc, timeline(), p0, t_cov)[:, :9, :9]
-
+            how[name] = "steps"
+        if how:
+            engine_info["noise"] = how
         return noise_cov
 
     if engine == "fast":
@@ -287,6 +303,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
         src_head = np.zeros((len(t_cov), 0))
 
     res = DriftResult(t, nav, att, t_cov, sources, src_h, src_head, noise_cov)
+    res.engine = engine_info
     res.metrics = headline(res)
     return res
 

@@ -531,9 +531,22 @@ class ConstantErrorResponse:
     coarse : (Mc, 9, N)
         Response to each source (scaled by its value), on the coarse grid.
     windows : dict
-        Quadrature windows used, by kind (``still``, ``cached``, ``direct``).
+        Quadrature windows used, by kind (``still``, ``rotation``, ``cached``,
+        ``direct``, ``partial``); ``periods``, the whole periods copied from the first
+        (0 without lifting), ``lift_period`` (s, 0 without lifting) and ``phase_step``
+        (s, 0 without reuse of the vehicle part by phase).
     nodes : int
         Attitude evaluations used.
+    paths : frozenset of str
+        The faster ways the outputs were computed (none of them changes the numbers
+        beyond round-off, only the work): ``fine-grid`` (fine outputs of a uniform grid
+        as one product per window shape) or ``fine-each``; ``states-grid`` or
+        ``states-each`` (modal states at fine times, e.g. one lifted period);
+        ``cached-blocks`` (whole phase steps as tabulated blocks), ``cached-aligned``
+        or ``cached-anywhere`` (in-window integrals of cached windows at tabulated
+        offsets, or from their series); ``partial-table`` (partial stops from the
+        tabulated blocks); ``rotation-grid`` or ``rotation-each`` (turn integrals per
+        grid offset, or per distinct offset).
     """
 
     t_fine: np.ndarray
@@ -542,6 +555,7 @@ class ConstantErrorResponse:
     coarse: np.ndarray
     windows: dict
     nodes: int
+    paths: frozenset = frozenset()
 
 
 def engine_threads() -> int:
@@ -705,7 +719,11 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
         )
     }
     counts["periods"] = 0 if lift is None else int(round((t_coarse[-1] - lift[0]) / lift[1]))
-    return ConstantErrorResponse(t_fine, fine, t_coarse, coarse, counts, run.nodes)
+    counts["lift_period"] = 0.0 if lift is None else float(lift[1])
+    counts["phase_step"] = 0.0 if step is None else float(step)
+    return ConstantErrorResponse(
+        t_fine, fine, t_coarse, coarse, counts, run.nodes, frozenset(run.paths)
+    )
 
 
 def _blocks(n: int) -> list[tuple[int, int]]:
@@ -877,6 +895,7 @@ class _Run:
         self.src: np.ndarray | None = None  # their base windows
         self.nodes = 0
         self._memo: dict = {}  # tables shared by the fine-output blocks
+        self.paths: set[str] = set()  # the faster ways taken (ConstantErrorResponse.paths)
 
     def _add_features(self, j: np.ndarray, y: np.ndarray) -> None:
         """Add feature integrals ``y`` (K, R, 63) of coarse intervals ``j`` (distinct)."""
@@ -1230,6 +1249,7 @@ class _Run:
         states of :meth:`fine_states` are mapped to navigation errors.
         """
         if dt_fine is None or not len(t):
+            self.paths.add("fine-each")
             return self.modes.to_nav(self.fine_states(t, dt_fine))
         full = self.full if self.full is not None else self.win
         wf = np.searchsorted(full.b, t - MERGE, side="left").clip(0, len(full.b) - 1)
@@ -1237,7 +1257,9 @@ class _Run:
         dt = t - full.a[wf]
         table = _OffsetTable(self.lam, dt, dt_fine, wf)
         if table.k is None:
+            self.paths.add("fine-each")
             return self.modes.to_nav(self.fine_states(t, dt_fine))
+        self.paths.add("fine-grid")
         return self._nav_on_grid(table, w, wf, dt, dt_fine)
 
     def _nav_on_grid(self, table, w, wf, dt, dt_fine) -> np.ndarray:
@@ -1291,6 +1313,8 @@ class _Run:
             # start (|lambda| delta <= 1e-12: e^{lambda delta} = 1 to below round-off);
             # one cut by the block's edge keeps its in-window integrals.
             whole = cached_run & (counts == nf) & (k[first] == 1) & (table.delta <= 1e-9)
+            if np.any(whole):
+                self.paths.add("cached-blocks")
             wc = w_run[whole]
             cached_key = np.full(len(first), len(blocks))
             cached_key[whole] = (
@@ -1344,6 +1368,7 @@ class _Run:
         p_run = kind_run == PARTIAL
         if not np.any(p_run) or not fine_aligned(self.step, dt_fine):
             return None
+        self.paths.add("partial-table")
         wp = w_run[p_run]
         alpha = self.win.a[wp] - np.floor(self.win.a[wp] / self.step + 1e-9) * self.step
         shift = np.exp(self.lam[None, :] * alpha[:, None]) * self._cached_integrals_anywhere(
@@ -1371,7 +1396,9 @@ class _Run:
         dt = t - full.a[wf]
         table = _OffsetTable(self.lam, dt, dt_fine, wf)
         if table.k is not None:
+            self.paths.add("states-grid")
             return self._fine_on_grid(table, w, wf, dt, dt_fine)
+        self.paths.add("states-each")
         out = np.empty((len(t), len(self.lam)), dtype=complex)
         kind = self.win.kind[w]
         zs = self.z_start[wf]
@@ -1423,16 +1450,20 @@ class _Run:
         rr = np.flatnonzero(kind == ROTATION)
         if len(rr):
             if grid is not None:
+                self.paths.add("rotation-grid")
                 run, delta = grid
                 ints[rr] = self._rotation_integrals_on_grid(w[rr], dt[rr], dt_fine, run[rr], delta)
             else:
+                self.paths.add("rotation-each")
                 ints[rr] = self._rotation_integrals(w[rr], dt[rr], dt_fine)
         c = np.flatnonzero(kind == CACHED)
         if len(c):
             if fine_aligned(self.step, dt_fine):
+                self.paths.add("cached-aligned")
                 pos = np.clip(np.round(dt[c] / dt_fine).astype(int) - 1, 0, None)
                 ints[c] = self._cached_integrals(w[c], pos, dt_fine)
             else:
+                self.paths.add("cached-anywhere")
                 ints[c] = self._cached_integrals_anywhere(w[c], dt[c])
         d = np.flatnonzero(kind == DIRECT)
         if len(d):

@@ -283,7 +283,7 @@ class ScheduleHistory:
         b_dot = np.where(outer, 0.0, rate)
         iso = kind == "isolate"
         if np.any(iso):
-            a_dot[iso] = self._isolation_rate(t[iso], k[iso], c_bn[iso], w_nb[iso], a[iso], b[iso])
+            a_dot[iso] = self._isolation_rate(k[iso], c_bn[iso], w_nb[iso], a[iso], b[iso])
         w_bs = np.zeros((len(t), 3))
         w_bs[:, 2] = a_dot
         w_bs[:, 0] = b_dot * np.cos(a)
@@ -293,13 +293,10 @@ class ScheduleHistory:
             return _times_rot_z(c_bn, a), w
         return c_bn @ table_dcm(a, b, tab.mounting), w
 
-    def _isolation_rate(self, t, k, c_bn=None, w_nb=None, a=None, b=None) -> np.ndarray:
-        """Outer-gimbal rate that keeps the IMU heading on its target (rad/s)."""
+    def _isolation_rate(self, k, c_bn, w_nb, a, b) -> np.ndarray:
+        """Outer-gimbal rate that keeps the IMU heading on its target (rad/s), for
+        segments ``k`` at vehicle attitudes ``c_bn``, rates ``w_nb`` and gimbal angles."""
         tab = self.table
-        if c_bn is None:
-            c_bn = self.motion.attitude(t)
-            w_nb = self.motion.rate_n(t)
-            a, b = tab.angles_at(t, self.motion)
         m = np.eye(3) if tab.mounting is None else tab.mounting
         u = rot_x(b) @ (m @ np.array([0.0, 1.0, 0.0]))  # IMU y axis before the outer gimbal
         ca, sa = np.cos(a), np.sin(a)
