@@ -828,9 +828,12 @@ def test_engine_takes_the_faster_paths_where_they_apply(scheme, motion, dt_out, 
         assert _relative(res.nav[np.isin(res.t, ones.t)], ones.nav[common]) < 1e-11
 
 
-@pytest.mark.parametrize("bandwidth", [0.05, 0.3, 1.2])
-@pytest.mark.parametrize("dt_coarse, dt_fine", [(60.0, 1.0), (60.0, 7.0), (45.0, 1.0),
-                                                (120.0, 1.0), (60.0, None)])  # fmt: skip
+# 0.40013 rad/s puts 2 P (2 bandwidth + fastest) / MAX_PHASE just above 3: the budget
+# then decides between 3 and 4 steps per period; a 3630 s coarse step (two coarse
+# times) is divided only by every fourth step length.
+@pytest.mark.parametrize("bandwidth", [0.05, 0.3, 0.40013, 1.2])
+@pytest.mark.parametrize("dt_coarse, dt_fine", [(60.0, 1.0), (60.0, 7.0), (45.0, 1.0), (120.0, 1.0),
+                                                (3630.0, 1.0), (60.0, None)])  # fmt: skip
 def test_phase_step_is_the_longest_within_the_phase_budget_among_the_best_aligned(
     bandwidth, dt_coarse, dt_fine
 ):
@@ -895,6 +898,11 @@ def test_lifting_needs_two_whole_periods_after_the_start():
         hist = ScheduleHistory(table, Motion(), dur)
         assert hist.period() == (60.0, 140.0)
         assert fp._lifting(hist, output_grid(dur, 1.0), output_grid(dur, 60.0)) == expected
+    # Outputs that are not a uniform grid do not recur period after period: no lifting.
+    irregular = np.concatenate([[0.0, 0.5], np.arange(1.0, 901.0)])
+    hist = ScheduleHistory(table, Motion(), 900.0)
+    assert fp._lifting(hist, irregular, output_grid(900.0, 60.0)) is None
+    assert fp._lifting(hist, output_grid(900.0, 1.0), irregular) is None
 
 
 def test_drift_analysis_defaults_are_one_second_outputs_one_minute_budget_one_second_steps():
