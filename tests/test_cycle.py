@@ -470,3 +470,38 @@ def test_cycle_integrals_refuse_schemes_without_a_fixed_cycle_by_name():
         cycle_integrals(TableScheme("empty", (), RATE, 60.0))
     with pytest.raises(InputError, match="static base"):
         cycle_integrals(build_scheme("two-position", RATE, 300.0), Turn(rate=0.01))
+
+
+def test_scenario_cycle_holds_the_base_at_its_start_attitude_in_the_declared_sense():
+    # The scenario's scheme on a static base at the attitude the motion has at t = 0
+    # (a sine swing starts at its mean heading), described in the scenario's own sense.
+    from inserr import scenario_from_dict
+    from inserr.core.errors import InputError
+    from inserr.schemes.cycle_integrals import scenario_cycle
+
+    scheme = {"name": "two-position", "rate": "6 deg/s", "stop": "300 s"}
+    swing = {"type": "yaw-swing", "heading": "15 deg", "pitch": "1 deg", "roll": "-2 deg",
+             "amplitude": "6 deg/s", "period": "120 s"}  # fmt: skip
+    for sense, h0 in (("clockwise-from-north", 15.0), ("counter-clockwise-from-north", -15.0)):
+        scen = scenario_from_dict(
+            {"scheme": scheme, "motion": {**swing, "heading_convention": sense}}
+        )
+        sch, base, desc = scenario_cycle(scen)
+        assert base.is_static and type(base) is Motion
+        assert math.degrees(base.heading) == pytest.approx(h0, abs=1e-12)
+        assert (base.pitch, base.roll) == pytest.approx((1 * DEG, -2 * DEG), abs=1e-15)
+        assert desc == (
+            "heading 15 deg, pitch 1 deg, roll -2 deg "
+            "(the scenario's yaw-swing motion held at its t = 0 attitude)"
+        )
+        assert sch.cycle_time == pytest.approx(build_scheme("two-position", RATE, 300).cycle_time)
+    _, base, desc = scenario_cycle(scenario_from_dict({"scheme": scheme}))
+    assert desc == "level, heading 0 (body = ENU)" and base.heading == 0.0
+    with pytest.raises(InputError, match="scheme.name"):
+        scenario_cycle(scenario_from_dict({}))
+    open_cycle = {"name": "custom", "rate": "6 deg/s", "stop": "60 s",
+                  "steps": [{"gimbal": "outer", "angle": "90 deg", "dwell": "60 s"}]}  # fmt: skip
+    with pytest.raises(InputError, match="outer gimbal by 90 deg in all"):
+        scenario_cycle(scenario_from_dict({"scheme": open_cycle}))
+    closed = {**open_cycle, "steps": open_cycle["steps"] * 4}
+    assert scenario_cycle(scenario_from_dict({"scheme": closed}))[0].cycle_time == 4 * 75.0
