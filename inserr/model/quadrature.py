@@ -18,7 +18,6 @@ near 1e-15.
 
 from __future__ import annotations
 
-import math
 from functools import lru_cache
 
 import numpy as np
@@ -143,16 +142,3 @@ def points_for(phase: np.ndarray) -> np.ndarray:
     counts = np.array([c for _, c in _POINTS])
     idx = np.searchsorted(budgets, phase, side="left")
     return counts[np.clip(idx, 0, len(counts) - 1)]
-
-
-def largest_budget() -> float:
-    """The phase budget of the largest table entry, rad."""
-    return _POINTS[-1][0]
-
-
-def _check() -> None:  # pragma: no cover - used while calibrating the table
-    for n in (8, 12, 16, 20):
-        x = chebyshev_points(n)
-        assert math.isclose(fejer_weights(n).sum(), 2.0)
-        assert np.allclose(integration_matrix(np.array([1.0]), n)[0], fejer_weights(n))
-        assert np.allclose(integration_matrix(x, n) @ x**2, (x**3 + 1) / 3)
