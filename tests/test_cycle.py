@@ -505,3 +505,14 @@ def test_scenario_cycle_holds_the_base_at_its_start_attitude_in_the_declared_sen
         scenario_cycle(scenario_from_dict({"scheme": open_cycle}))
     closed = {**open_cycle, "steps": open_cycle["steps"] * 4}
     assert scenario_cycle(scenario_from_dict({"scheme": closed}))[0].cycle_time == 4 * 75.0
+
+
+def test_equivalent_drift_is_the_earth_rate_crossed_with_each_column():
+    # Omega = (0, 2, 3): Omega x e_E = (0, 3, -2), Omega x e_N = (-3, 0, 0),
+    # Omega x e_U = (2, 0, 0), by hand; columns in, columns out.
+    from inserr.schemes.cycle_integrals import CycleIntegrals
+
+    out = CycleIntegrals.equivalent_drift(np.array([0.0, 2.0, 3.0]), np.eye(3))
+    assert np.array_equal(out, [[0.0, -3.0, 2.0], [3.0, 0.0, 0.0], [-2.0, 0.0, 0.0]])
+    two = CycleIntegrals.equivalent_drift(np.array([0.0, 2.0, 3.0]), np.eye(3)[:, :2])
+    assert two.shape == (3, 2) and np.array_equal(two, out[:, :2])
