@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from inserr.core.imu import MISALIGNMENT_INDEX, MISALIGNMENTS
@@ -173,6 +173,9 @@ def _half_turn_sequence(turns, dwells):
     """Steps whose net outer angle is exactly +180 deg (last turn adjusted)."""
     angles = [a * DEG for a in turns]
     last = math.pi - sum(angles)
+    # A closing turn of 0 deg is no turn (turns summing to 180 deg, e.g. 10 + 170): a step
+    # must turn, so such a draw is not a schedule.
+    assume(abs(last) > 1e-6)
     steps = [Step("outer", a, d) for a, d in zip(angles, dwells, strict=False)]
     steps.append(Step("outer", last, dwells[-1]))
     return steps
