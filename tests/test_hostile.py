@@ -274,6 +274,12 @@ SCENARIO_BAD: dict[str, str] = {
         '[scheme]\nname = "two-position"\n'
         '[[scheme.steps]]\ngimbal = "inner"\nangle = "180 deg"\ndwell = "10 s"\n'
     ),
+    "custom step of 0 deg": (
+        '[scheme]\nname = "custom"\n'
+        '[[scheme.steps]]\ngimbal = "outer"\nangle = "0 deg"\ndwell = "10 s"\n'
+        '[[scheme.steps]]\ngimbal = "outer"\nangle = "180 deg"\ndwell = "10 s"\n'
+        '[[scheme.steps]]\ngimbal = "outer"\nangle = "-180 deg"\ndwell = "10 s"\n'
+    ),
     "delta on two-position": '[scheme]\nname = "two-position"\ndelta = 0.5\n',
     "variant on none": '[scheme]\nvariant = "crossing"\n',
     "reversal on two-position": '[scheme]\nname = "two-position"\nreversal = "60 s"\n',
@@ -308,6 +314,16 @@ def test_bad_scenario_file_is_one_line_and_exit_2(text, tmp_path, monkeypatch):
     rc, out, err = run_cli(["drift", str(path), "--step", "60", "--json"])
     assert_one_clear_line(rc, err, "drift")
     assert out == "" and snapshot(tmp_path) == before
+
+
+def test_a_step_that_does_not_turn_is_refused_by_the_library_too():
+    # A 0 deg step would have a zero turn time (|angle| / rate) and a 0 / 0 turn rate.
+    from inserr.schemes.open_loop import Step
+
+    for angle in (0.0, -0.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="must turn"):
+            Step("outer", angle, 10.0)
+    assert Step("outer", 1e-9, 10.0).angle == 1e-9  # any turn, however small, is a step
 
 
 def test_cycle_refuses_a_custom_table_that_does_not_return_to_its_start(tmp_path):

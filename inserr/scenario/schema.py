@@ -1084,6 +1084,12 @@ def _steps(rows: list[dict]):
         if gimbal not in ("outer", "inner"):
             raise InputError(f"{fld}.gimbal", f"unknown gimbal {gimbal!r}", "use outer or inner")
         angle = parse_quantity(row["angle"], "angle", f"{fld}.angle")
+        if angle == 0.0:
+            raise InputError(
+                f"{fld}.angle",
+                "a 0 deg turn is not a step",
+                "add its dwell to the step before (or to scheme.stop) and remove it",
+            )
         dwell = parse_quantity(row["dwell"], "time", f"{fld}.dwell")
         if dwell < 0:
             raise InputError(f"{fld}.dwell", "must be >= 0")

@@ -52,6 +52,12 @@ class Step:
     rotation_time: float | None = None
     label: str = ""
 
+    def __post_init__(self) -> None:
+        # A 0 deg "turn" is a stop: its turn time |angle| / rate would be zero and its
+        # rate 0 / 0, so it is refused here rather than divided by later.
+        if not (math.isfinite(self.angle) and self.angle != 0.0):
+            raise ValueError(f"step {self.label!r}: a step must turn (angle {self.angle!r})")
+
 
 @dataclass(frozen=True)
 class TableScheme:
