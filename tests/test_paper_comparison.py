@@ -33,13 +33,17 @@ from inserr.drift.unknown_signs import (
 from inserr.schemes.turntable import ScheduleBuilder
 
 
-def _all_patterns(v: np.ndarray) -> dict[tuple, float]:
-    """M(s) for every pattern (brute force, straight from the definition)."""
-    out = {}
-    for s in itertools.product((-1.0, 1.0), repeat=v.shape[1]):
-        total = np.einsum("tnd,n->td", v, np.asarray(s))
-        out[s] = max(math.hypot(*row) for row in total)
-    return out
+def _patterns(n: int) -> np.ndarray:
+    """Every sign pattern of n sources with the first sign +1, (2^(n-1), n)."""
+    rest = np.array(list(itertools.product((1.0, -1.0), repeat=n - 1))).reshape(-1, n - 1)
+    return np.hstack([np.ones((len(rest), 1)), rest])
+
+
+def _maxima(v: np.ndarray, pats: np.ndarray) -> np.ndarray:
+    """M(s) of each pattern (rows of pats), brute force straight from the definition
+    (M(s) = M(-s), so the patterns of :func:`_patterns` give every value there is)."""
+    sums = np.einsum("tnd,pn->ptd", v, pats)
+    return np.max(np.hypot(sums[..., 0], sums[..., 1]), axis=1)
 
 
 def _vectors(seed: int, t: int = 30, n: int = 7) -> np.ndarray:
@@ -55,12 +59,12 @@ def _vectors(seed: int, t: int = 30, n: int = 7) -> np.ndarray:
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_sign_pattern_range_matches_brute_force_when_exhaustive(seed):
     v = _vectors(seed)
-    m = _all_patterns(v)
+    m = _maxima(v, _patterns(v.shape[1]))
     r = sign_pattern_range(v, exhaustive=7, times=30)
     # Both ends are maxima of the same sums: roundoff only.
-    assert r.highest == pytest.approx(max(m.values()), rel=1e-12)
-    assert r.lowest == pytest.approx(min(m.values()), rel=1e-12)
-    assert r.lowest_bound <= min(m.values()) * (1 + 1e-12)
+    assert r.highest == pytest.approx(m.max(), rel=1e-12)
+    assert r.lowest == pytest.approx(m.min(), rel=1e-12)
+    assert r.lowest_bound <= m.min() * (1 + 1e-12)
     # The patterns returned give the values returned.
     assert pattern_maximum(v, r.highest_signs) == pytest.approx(r.highest, rel=1e-12)
     assert pattern_maximum(v, r.lowest_signs) == pytest.approx(r.lowest, rel=1e-12)
@@ -71,12 +75,12 @@ def test_sign_pattern_range_brackets_the_minimum_with_few_exhaustive_sources(see
     # Only the 4 largest of 10 sources are searched exhaustively, at 8 of 30 times:
     # the bound must still lie below every pattern and the found value above the minimum.
     v = _vectors(seed, n=10)
-    m = _all_patterns(v)
+    m = _maxima(v, _patterns(v.shape[1]))
     r = sign_pattern_range(v, exhaustive=4, times=8, starts=4)
-    true_min = min(m.values())
+    true_min = m.min()
     assert r.lowest_bound <= true_min * (1 + 1e-12)
     assert r.lowest >= true_min * (1 - 1e-12)
-    assert r.highest == pytest.approx(max(m.values()), rel=1e-12)
+    assert r.highest == pytest.approx(m.max(), rel=1e-12)
 
 
 def test_sign_pattern_range_of_a_hand_built_pair():
@@ -90,8 +94,8 @@ def test_sign_pattern_range_of_a_hand_built_pair():
 @pytest.mark.parametrize("seed", [6, 7])
 def test_closest_pattern_is_within_the_largest_source_and_near_brute_force(seed):
     v = _vectors(seed)
-    m = _all_patterns(v)
-    values = np.array(sorted(m.values()))
+    m = _maxima(v, _patterns(v.shape[1]))
+    values = np.array(np.sort(m))
     largest = np.max(np.hypot(v[..., 0], v[..., 1]))
     for target in np.linspace(values[0], values[-1], 5):
         best = np.min(np.abs(values - target))
@@ -110,10 +114,10 @@ def test_closest_pattern_is_within_the_largest_source_and_near_brute_force(seed)
 
 def test_figure_reach_verdicts():
     v = _vectors(8)
-    m = _all_patterns(v)
-    lo, hi = min(m.values()), max(m.values())
+    m = _maxima(v, _patterns(v.shape[1]))
+    lo, hi = m.min(), m.max()
     # A value some pattern takes exactly is reached; outside the range it is proved out.
-    some = sorted(m.values())[len(m) // 3]
+    some = np.sort(m)[len(m) // 3]
     assert figure_reach(v, some)["verdict"] == "reached"
     assert figure_reach(v, 1.5 * hi)["verdict"] == "above every pattern"
     below = figure_reach(v, 0.5 * lo)
@@ -218,18 +222,6 @@ def test_ratio_verdict_counts_by_hand():
     assert (v["better_2pct"], v["level_2pct"], v["worse_2pct"]) == (1, 1, 1)
     assert v["largest_ratio"]["ratio"] == pytest.approx(1.1, rel=1e-12)
     assert v["median_ratio"] == pytest.approx(1.01, rel=1e-12)
-
-
-def _patterns(n: int) -> np.ndarray:
-    """Every sign pattern of n sources with the first sign +1, (2^(n-1), n)."""
-    rest = np.array(list(itertools.product((1.0, -1.0), repeat=n - 1))).reshape(-1, n - 1)
-    return np.hstack([np.ones((len(rest), 1)), rest])
-
-
-def _maxima(v: np.ndarray, pats: np.ndarray) -> np.ndarray:
-    """M(s) of each pattern (rows of pats), vectorized brute force."""
-    sums = np.einsum("tnd,pn->ptd", v, pats)
-    return np.max(np.hypot(sums[..., 0], sums[..., 1]), axis=1)
 
 
 def test_sign_pattern_range_of_no_source_and_of_one_source():
