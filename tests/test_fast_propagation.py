@@ -448,7 +448,11 @@ def test_gauss_markov_stationary_limit_equals_white_noise():
      (Motion(), "continuous"),
      (SWING, "two-position"),
      (SWING, "none"),
-     (Motion(), "four-position")],
+     (Motion(), "four-position"),
+     # Closed-loop rules whose flown schedule repeats (a realized period).
+     (Motion(heading=0.3, pitch=0.02, roll=-0.03), "nulling-two-position"),
+     (Motion(heading=0.3, pitch=0.02, roll=-0.03), "heading-isolation"),
+     (SWING, "heading-isolation")],
 )  # fmt: skip
 def test_periodic_lifting_equals_the_whole_run(monkeypatch, motion, scheme):
     # A periodic history (open-loop table on a static or periodic vehicle) is computed
@@ -717,6 +721,73 @@ def test_history_period_is_found_exactly_when_the_attitude_repeats(name):
             assert t0 + table.cycle > dur or mismatch(t0, table.cycle) > 4e-10
     else:
         assert mismatch(*found) < 1e-13
+
+
+def _attitude_mismatch(table, motion, dur, t0, p):
+    """Largest |C_s^n(t + P) - C_s^n(t)| over [t0, dur - P] (every 0.25 s and the end),
+    from the table's angles and the vehicle's attitude, not the history's evaluation."""
+    t = np.concatenate([np.arange(t0, dur - p, 0.25), [dur - p]])
+
+    def attitude(tt):
+        return motion.attitude(tt) @ table.dcm_at(tt, motion)
+
+    return float(np.abs(attitude(t + p) - attitude(t)).max())
+
+
+def test_a_closed_loop_schedule_that_repeats_has_its_realized_period():
+    # A closed-loop rule declares no cycle; what it flew may still repeat. Truth from the
+    # attitude itself (as above): found periods repeat to round-off, near misses do not.
+    from inserr.schemes.turntable import ScheduleBuilder, isolation_angle
+
+    def holds(motion, targets, last_shift=0.0):
+        # Isolation holds of 50 s with 40 s stops between, then one more hold at the first
+        # target: the table jumps from hold to hold (no turn between them), so it ends
+        # where its next period would begin and the attitude check reaches the end.
+        b = ScheduleBuilder()
+        targets = [*targets, targets[0]]
+        for i, target in enumerate(targets):
+            target = target + (last_shift if i == len(targets) - 1 else 0.0)
+            # The angles the hold starts and ends at (the stop after it holds the end).
+            a = isolation_angle(motion.attitude(np.array([b.t, b.t + 50.0])), 0.0, None, target)
+            b.isolate(50.0, target, float(a[0]), float(a[1]))
+            if i < len(targets) - 1:
+                b.stop(40.0)
+        return b.build()
+
+    # Holds at 0 and 45 deg in turn: 180 s, four segments (not the 90 s of two).
+    table = holds(_TILTED, [0.0, 45 * DEG] * 3)
+    assert table.cycle is None
+    assert ScheduleHistory(table, _TILTED, 590.0).period() == (0.0, 180.0)
+    assert _attitude_mismatch(table, _TILTED, 590.0, 0.0, 180.0) < 1e-13
+    # The last hold 1e-8 rad off its target: the attitude differs there, no period.
+    near = holds(_TILTED, [0.0, 45 * DEG] * 3, last_shift=1e-8)
+    assert ScheduleHistory(near, _TILTED, 590.0).period() is None
+    assert _attitude_mismatch(near, _TILTED, 590.0, 0.0, 180.0) > 4e-10
+    # On a swinging vehicle the holds repeat with the least common multiple of the
+    # table's 180 s and the swing's 120 s: 360 s (two periods need 720 s of the 770 s).
+    swing = YawSwing(heading=0.3, pitch=2 * DEG, roll=-3 * DEG, amplitude=6 * DEG, period=120.0)
+    table = holds(swing, [0.0, 45 * DEG] * 4)
+    assert ScheduleHistory(table, swing, 770.0).period() == (0.0, 360.0)
+    assert _attitude_mismatch(table, swing, 770.0, 0.0, 360.0) < 1e-13
+    assert ScheduleHistory(table, swing, 719.0).period() is None
+    # The catalogue rules: on a static base the nulling rule's stops all take the
+    # minimum (300 s) and its turns go +, -, -, +: 4 (300 + 30) s. Heading isolation holds
+    # the same headings for the same times. On the swing the nulling rule lengthens its
+    # stops by the swing's phase and the flexible rule turns by what it measured: no
+    # period, and none is claimed.
+    dur = 4 * 3600.0
+    for name, motion, expected in (
+        ("nulling-two-position", _TILTED, (0.0, 1320.0)),
+        ("heading-isolation", _TILTED, (0.0, 1320.0)),
+        ("heading-isolation", SWING, (0.0, 1320.0)),
+        ("nulling-two-position", SWING, None),
+        ("flexible-two-position", SWING, None),
+    ):
+        table = build_scheme(name, 6 * DEG, 300.0).plan(motion, dur)
+        found = ScheduleHistory(table, motion, dur).period()
+        assert found == expected, name
+        if found is not None:
+            assert _attitude_mismatch(table, motion, dur, *found) < 1e-12, name
 
 
 def test_history_period_needs_two_periods_and_a_commensurate_vehicle():

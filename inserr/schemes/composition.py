@@ -233,7 +233,14 @@ class ScheduleHistory:
         static base any). P is the least common multiple of the two (when they are
         commensurate to 1e-9 and P leaves at least two periods in the run), and the
         schedule's segments after t0 are checked to recur after P (same kinds, gimbals,
-        durations, rates, and angles modulo a full turn).
+        durations, rates, and angles modulo a full turn; isolation segments also the
+        same target heading modulo a full turn and target rate).
+
+        A closed-loop rule declares no cycle, but what it flew may still repeat: on a
+        static base the nulling rule's stops all take the minimum and heading isolation
+        holds the same headings for the same times. Its least *realized* period, a
+        whole number of segments (at most :data:`REALIZED_SEGMENTS`) found by the same
+        recurrence check, is returned then.
         """
         cycle = self.table.cycle
         vehicle = self.motion.repeat_period()
@@ -242,9 +249,9 @@ class ScheduleHistory:
         if not cycle:
             # No table cycle: one stop held for the whole run (the "none" scheme) repeats
             # with the vehicle, or with any period on a static base (an hour).
-            if len(self.table) != 1 or self.table.kind[0] != "stop":
-                return None
-            return 0.0, (vehicle if vehicle is not None else 3600.0)
+            if len(self.table) == 1 and self.table.kind[0] == "stop":
+                return 0.0, (vehicle if vehicle is not None else 3600.0)
+            return _realized_period(self.table, vehicle, self._duration)
         period = float(cycle) if vehicle is None else _common_period(float(cycle), vehicle)
         if period is None or 2 * period > self._duration:
             return None
@@ -334,6 +341,39 @@ def _common_period(a: float, b: float, most: int = 1000) -> float | None:
     return None
 
 
+#: Most segments per period :func:`_realized_period` tries. A closed-loop rule that
+#: repeats does so within a few turns (the nulling rule on a static base: four
+#: segments, 1320 s at 300 s stops); a longer search costs time on every run that does
+#: not repeat.
+REALIZED_SEGMENTS = 64
+
+
+def _realized_period(
+    table: TableSchedule, vehicle: float | None, duration: float
+) -> tuple[float, float] | None:
+    """``(t0, P)``, P the least whole number of segments after which ``table`` recurs (and
+    a multiple of the vehicle's period ``vehicle`` if not None), from ``t0`` = 0 or the
+    end of the first segment, with two periods in ``duration``; else None."""
+    n = len(table)
+    for t0 in np.unique(np.concatenate([[0.0], table.t0[1:2]])):
+        j0 = int(np.searchsorted(table.t0, t0 - 1e-9))
+        for m in range(1, REALIZED_SEGMENTS + 1):
+            if j0 + 2 * m > n or 2 * (table.t0[j0 + m] - t0) > duration:
+                break
+            # A cheap necessary condition first: the next m segments last as long.
+            if not np.allclose(
+                table.duration[j0 + m : j0 + 2 * m], table.duration[j0 : j0 + m], rtol=0, atol=1e-9
+            ):
+                continue
+            p = float(table.t0[j0 + m] - t0)
+            period = p if vehicle is None else _common_period(p, vehicle)
+            if period is None or 2 * period > duration:
+                continue
+            if _recurs(table, float(t0), period, duration):
+                return float(t0), period
+    return None
+
+
 def _recurs(table: TableSchedule, t0: float, period: float, duration: float) -> bool:
     """Whether every segment starting in ``[t0, duration - period]`` recurs one period later."""
     k = np.flatnonzero((table.t0 >= t0 - 1e-9) & (table.t0 < duration - period - 1e-9))
@@ -349,6 +389,10 @@ def _recurs(table: TableSchedule, t0: float, period: float, duration: float) -> 
 
     kind = np.array(table.kind)
     gimbal = np.array(table.gimbal)
+    # An isolation segment's angle is a function of the vehicle attitude, its inner
+    # angle and its target heading (the branch follows a0): it recurs when those do.
+    iso = k[kind[k] == "isolate"]
+    iso_later = later[kind[k] == "isolate"]
     return bool(
         np.all(np.abs(table.t0[later] - table.t0[k] - period) < 1e-6)
         and np.all(kind[later] == kind[k])
@@ -357,5 +401,6 @@ def _recurs(table: TableSchedule, t0: float, period: float, duration: float) -> 
         and np.allclose(table.rate[later], table.rate[k], rtol=0, atol=1e-15)
         and same_angle(table.a0[later], table.a0[k])
         and same_angle(table.b0[later], table.b0[k])
-        and not np.any(kind[k] == "isolate")
+        and same_angle(table.target_heading[iso_later], table.target_heading[iso])
+        and np.allclose(table.target_rate[iso_later], table.target_rate[iso], rtol=0, atol=1e-15)
     )
