@@ -952,6 +952,34 @@ def test_grid_step_recognises_uniform_grids_from_zero():
         assert fp._grid_step(np.array(t)) is None, t
 
 
+@pytest.mark.parametrize(
+    ("t0_steps", "period_steps", "count"),
+    [(0, 22, 4321), (3, 7, 3 + 2 * 7 + 1), (5, 4, 5 + 2 * 4), (1, 6, 1 + 9 * 6 + 5)],
+)
+def test_lifted_coarse_states_equal_the_scan(t0_steps, period_steps, count):
+    # Inputs that repeat every period after t0 (anything before it): the per-period
+    # recurrence must give the scan's states, whole periods, a cut last one, t0 > 0.
+    # Both are the same sums in another order: round-off of the largest state (1e-13).
+    rng = np.random.default_rng(t0_steps + count)
+    lam = NavModes(ErrorModel(SITE, Layout(bias=False))).lam
+    h = 60.0
+    t = np.arange(count) * h
+    shape = (len(lam), 5)
+
+    def noise(*lead):
+        return rng.normal(size=lead + shape) + 1j * rng.normal(size=lead + shape)
+
+    one = noise(period_steps)
+    reps = -(-(count - 1 - t0_steps) // period_steps)
+    inputs = np.concatenate([noise(1 + t0_steps), np.tile(one, (reps, 1, 1))])[:count]
+    z0 = noise()
+    want = np.concatenate([z0[None], fp.scan(lam, 0.0, z0, t[1:], inputs[1:])])
+    got = np.empty_like(want)
+    got[0] = z0
+    fp._lifted_coarse(lam, t, inputs, (t0_steps * h, period_steps * h), got)
+    assert np.abs(got - want).max() <= 1e-13 * np.abs(want).max()
+
+
 def test_lifting_needs_two_whole_periods_after_the_start():
     # Two-position on the swing repeats every 1320 s: lifted from exactly two periods
     # on. A static table whose 140 s cycle starts after a 60 s stop repeats from 60 s;
@@ -1017,12 +1045,15 @@ def test_engine_threads_follow_the_environment(monkeypatch):
     assert fp.engine_threads() == 2
 
 
-@pytest.mark.parametrize("scheme", ["nulling-two-position", "two-position"])
+@pytest.mark.parametrize(
+    "scheme", ["nulling-two-position", "flexible-two-position", "two-position"]
+)
 def test_results_do_not_depend_on_the_thread_count(monkeypatch, scheme):
     """The fine outputs go in blocks that depend on their count only, computed on one
-    thread or two, and the noise alongside the constant errors: bit-for-bit the same
-    numbers either way (a closed-loop schedule on the swing, and a periodic one, whose
-    periods are lifted). 15 h at 1 s: more outputs than one block takes."""
+    thread or two, the phase-template and sampled windows side by side, and the noise
+    alongside the constant errors: bit-for-bit the same numbers either way (closed-loop
+    schedules on the swing, and a periodic one, whose periods are lifted). 15 h at 1 s:
+    more outputs than one block takes."""
     duration = 15 * 3600.0
     history = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(SWING, duration), SWING,
                               duration)  # fmt: skip
@@ -1034,6 +1065,8 @@ def test_results_do_not_depend_on_the_thread_count(monkeypatch, scheme):
         runs[threads] = analyze_drift(SITE, imu, INIT, history, dt_out=1.0, dt_cov=60.0)
     one, two = runs["1"], runs["2"]
     assert len(one.t) > fp.SPLIT_FINE and set(one.noise_cov) == {"arw", "vrw"}
+    if scheme != "two-position":  # both window stages ran, side by side on two threads
+        assert one.engine["windows"]["cached"] > 0 and one.engine["windows"]["direct"] > 0
     for name in ("nav", "attitude", "source_horizontal", "source_heading"):
         assert np.array_equal(getattr(one, name), getattr(two, name)), name
     assert one.noise_cov.keys() == two.noise_cov.keys()

@@ -45,6 +45,7 @@ continuous motion without sub-steps.
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -663,8 +664,12 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     run = _Run(modes, history, pieces, win, base_coarse, a_sig, step, sources)
     run.still_windows()
     run.rotation_windows()
-    run.cached_windows()
-    run.direct_windows()
+    # The phase-template windows and the sampled ones are independent: side by side on
+    # engine_threads(); the sampled windows' per-source inputs are added after the
+    # template's, as when they ran one after the other (identical to the last bit).
+    sink: list = []
+    run_blocks([run.cached_windows, lambda: run.direct_windows(sink)])
+    run.add_inputs(sink)
     inputs = run.inputs
     if lift is not None:
         run.full, run.src, inputs = _tile(win, run.inputs, t0, period, t_coarse)
@@ -683,7 +688,9 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
         z_src0 = modes.to_modes(sources.x0, axis=0)  # (R, N)
         coarse_z = np.empty((len(t_coarse), modes.n_modes, sources.n), dtype=complex)
         coarse_z[0] = z_src0
-        if len(t_coarse) > 1:
+        if lift is not None:
+            _lifted_coarse(lam, t_coarse, inputs, lift, coarse_z)
+        elif len(t_coarse) > 1:
             coarse_z[1:] = scan(lam, float(t_coarse[0]), z_src0, t_coarse[1:], inputs[1:])
         return modes.to_nav(coarse_z * sources.value[None, None, :], axis=1)
 
@@ -784,6 +791,37 @@ def _lifted_fine(run, modes: NavModes, lift, t: np.ndarray, h: float, out: np.nd
 
     tasks = [periods(k, min(k + per_block, n_per)) for k in range(0, n_per, per_block)]
     return tasks + [j0 + 1]
+
+
+def _lifted_coarse(lam: np.ndarray, t: np.ndarray, inputs: np.ndarray, lift, out: np.ndarray):
+    """Per-source states on the coarse grid of a periodic run, in place (``out[0]`` given).
+
+    The coarse grid is uniform (step h) and the inputs repeat every period after ``t0``
+    (:func:`_tile`), so ``z(t0 + k P + c h) = e^{lambda c h} Z_k + p_c``, with ``p`` the
+    response of one period from a zero state and ``Z_k = e^{lambda P} Z_{k-1} + p_P``
+    the state at the start of period k: the scan runs over the first period only, and
+    every later period is one multiply-add, instead of the scan's several passes.
+    """
+    t0, period = lift
+    h = float(t[1] - t[0])
+    j0, n_s = int(round(t0 / h)), int(round(period / h))
+    first = j0 + n_s  # index of the end of the first period
+    out[1 : first + 1] = scan(lam, float(t[0]), out[0], t[1 : first + 1], inputs[1 : first + 1])
+    e = np.exp(lam[None, :] * (np.arange(1, n_s + 1) * h)[:, None])[:, :, None]  # (n_s, R, 1)
+    p = out[j0 + 1 : first + 1] - e * out[j0][None]  # (n_s, R, N)
+    n_per = -(-(len(t) - 1 - j0) // n_s)  # periods begun after t0
+    z = np.empty((n_per,) + out.shape[1:], dtype=complex)
+    z[0] = out[j0]
+    for k in range(1, n_per):
+        z[k] = e[-1] * z[k - 1] + p[-1]
+    whole = (len(t) - 1 - j0) // n_s  # periods that end within the grid
+    if whole > 1:
+        rows = out[first + 1 : j0 + 1 + whole * n_s].reshape((whole - 1, n_s) + out.shape[1:])
+        np.multiply(e[None], z[1:whole, None], out=rows)
+        rows += p[None]
+    if whole < n_per:  # the last period, cut by the end of the run
+        lo = j0 + 1 + whole * n_s
+        out[lo:] = e[: len(t) - lo] * z[whole][None] + p[: len(t) - lo]
 
 
 def _lifting(history, t_fine: np.ndarray, t_coarse: np.ndarray) -> tuple[float, float] | None:
@@ -894,19 +932,41 @@ class _Run:
         self.full: Windows | None = None  # the whole run's windows when lifted
         self.src: np.ndarray | None = None  # their base windows
         self.nodes = 0
+        self._lock = threading.Lock()
         self._memo: dict = {}  # tables shared by the fine-output blocks
         self.paths: set[str] = set()  # the faster ways taken (ConstantErrorResponse.paths)
 
-    def _add_features(self, j: np.ndarray, y: np.ndarray) -> None:
-        """Add feature integrals ``y`` (K, R, 63) of coarse intervals ``j`` (distinct)."""
+    def _add_features(self, j: np.ndarray, y: np.ndarray, sink: list | None = None) -> None:
+        """Add feature integrals ``y`` (K, R, 63) of coarse intervals ``j`` (distinct).
+
+        With ``sink`` the per-source inputs are appended to it as ``(j, inputs)`` instead,
+        for :meth:`add_inputs` to add later (a stage running beside another).
+        """
         form = self.source_form  # (R, 63, N)
+        if sink is not None:
+            per = np.empty((len(j), form.shape[0], form.shape[2]), dtype=complex)
+            for r in range(form.shape[0]):
+                per[:, r, :] = y[:, r, :] @ form[r]
+            sink.append((j, per))
+            return
         for r in range(form.shape[0]):
             self.inputs[j, r, :] += y[:, r, :] @ form[r]
+
+    def add_inputs(self, sink: list) -> None:
+        """Add the per-source inputs a stage left in ``sink`` (:meth:`_add_features`),
+        mode by mode as :meth:`_add_features` adds them: the same sums to the last bit."""
+        for j, per in sink:
+            for r in range(per.shape[1]):
+                self.inputs[j, r, :] += per[:, r, :]
+
+    def _count(self, n: int) -> None:
+        with self._lock:  # stages may run on two threads
+            self.nodes += n
 
     # --- attitude at nodes ---------------------------------------------------------
     def _imu_features(self, t, piece):
         c, w_ns = self.history.evaluate(t, piece)
-        self.nodes += len(t)
+        self._count(len(t))
         w_is = np.einsum("nji,nj->ni", c, self.earth + w_ns)  # C^T (Omega + w): IMU frame
         f_s = np.einsum("nji,j->ni", c, self.f_n)  # C^T f: IMU frame
         return _features(c, w_is, f_s)
@@ -951,7 +1011,7 @@ class _Run:
         if not len(idx):
             return
         c_a, w = self.history.evaluate(win.a[idx], win.piece[idx])
-        self.nodes += len(idx)
+        self._count(len(idx))
         rho = np.linalg.norm(w, axis=1)
         axis = w / rho[:, None]
         ks = np.arange(-2, 3)
@@ -1069,7 +1129,7 @@ class _Run:
         if np.any(cls == 0):
             t = (np.arange(m)[:, None] * step + s[None, :]).ravel()
             c_bn, w_nb = self.history.evaluate_vehicle(t)
-            self.nodes += len(t)
+            self._count(len(t))
             w_b = np.einsum("nji,nj->ni", c_bn, self.earth + w_nb)
             f_b = np.einsum("nji,j->ni", c_bn, self.f_n)
             fv[0] = _features(c_bn, w_b, f_b).reshape(m, n, N_FEATURES)
@@ -1199,7 +1259,9 @@ class _Run:
             self.inputs[jj] += sums
 
     # --- direct windows: attitude sampled at each window's points ----------------------
-    def direct_windows(self) -> None:
+    def direct_windows(self, sink: list | None = None) -> None:
+        """Windows whose attitude is sampled at their own points (turns on a moving
+        vehicle, isolation turns); ``sink`` as in :meth:`_add_features`."""
         win, lam = self.win, self.lam
         idx = np.flatnonzero(win.kind == DIRECT)
         if not len(idx):
@@ -1226,7 +1288,7 @@ class _Run:
             y = _window_sums(nd, win.n[sel], wt, feats)  # (Wc, R, 63) to each window's end
             to_c = self._to_coarse(win.b[sel], win.coarse[sel])  # (Wc, R)
             jj, sums = _group_sum(win.coarse[sel], y * to_c[:, :, None])
-            self._add_features(jj, sums)
+            self._add_features(jj, sums, sink)
             self.direct_t[base : base + len(nd.t)] = nd.t
             # e^{-lambda (s - a)} u(s): what the fine outputs integrate (kept, not the input).
             a_w = win.a[sel][nd.window]
