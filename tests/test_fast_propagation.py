@@ -954,7 +954,7 @@ def test_grid_step_recognises_uniform_grids_from_zero():
 
 @pytest.mark.parametrize(
     ("t0_steps", "period_steps", "count"),
-    [(0, 22, 4321), (3, 7, 3 + 2 * 7 + 1), (5, 4, 5 + 2 * 4), (1, 6, 1 + 9 * 6 + 5)],
+    [(0, 22, 4321), (3, 7, 3 + 2 * 7 + 1), (5, 4, 5 + 2 * 4), (1, 6, 1 + 9 * 6 + 5), (0, 1, 500)],
 )
 def test_lifted_coarse_states_equal_the_scan(t0_steps, period_steps, count):
     # Inputs that repeat every period after t0 (anything before it): the per-period

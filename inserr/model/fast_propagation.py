@@ -812,8 +812,9 @@ def _lifted_coarse(lam: np.ndarray, t: np.ndarray, inputs: np.ndarray, lift, out
     n_per = -(-(len(t) - 1 - j0) // n_s)  # periods begun after t0
     z = np.empty((n_per,) + out.shape[1:], dtype=complex)
     z[0] = out[j0]
-    for k in range(1, n_per):
-        z[k] = e[-1] * z[k - 1] + p[-1]
+    if n_per > 1:  # Z_k = e^{lambda P} Z_{k-1} + p_P: a scan with the same jump each period
+        starts = t[j0] + np.arange(1, n_per) * period
+        z[1:] = scan(lam, float(t[j0]), z[0], starts, np.broadcast_to(p[-1], z[1:].shape))
     whole = (len(t) - 1 - j0) // n_s  # periods that end within the grid
     if whole > 1:
         rows = out[first + 1 : j0 + 1 + whole * n_s].reshape((whole - 1, n_s) + out.shape[1:])
