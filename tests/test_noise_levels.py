@@ -279,25 +279,30 @@ def test_bias_instability_psd_integrates_to_the_gm_variance():
     assert bias_instability_psd(sigma, tau, 0.0) == pytest.approx(2 * sigma**2 * tau, rel=1e-15)
 
 
-def test_north_finder_gauss_markov_process_is_stationary_from_the_first_sample():
+@pytest.mark.parametrize("sensor", ["gyro", "accel"])
+def test_north_finder_gauss_markov_process_is_stationary_from_the_first_sample(sensor):
     # Ensemble over 1500 runs at fixed sample indices: variance sigma^2 at t = 0, t = tau
-    # and t = 2 tau, correlation exp(-1) between samples tau apart.
-    sigma, tau = 2e-6, 1.0
+    # and t = 2 tau, correlation exp(-1) between samples tau apart; on the sensor given
+    # the bias instability only (the other one's samples are the noise-free ones).
+    sigma, tau = (2e-6, 1.0) if sensor == "gyro" else (3e-4, 0.8)
+    other = "accel" if sensor == "gyro" else "gyro"
     ins = Instrument(sample_rate=50.0, table_rate=6 * DEG)
     grade = SensorGrade(
         gyro_arw=0.0,
         gyro_bias=0.0,
-        gyro_bias_instability=sigma,
-        gyro_correlation_time=tau,
         accel_vrw=0.0,
         accel_bias=0.0,
+        **{f"{sensor}_bias_instability": sigma, f"{sensor}_correlation_time": tau},
+        **{f"{other}_bias_instability": 0.0},
     )
     pose = Pose(0.5, 0.3)
     n = 1500
     clean = simulate(pose, ins, grade.without_noise(), 2.0)
     data = simulate(pose, ins, grade, 2.0, n_runs=n, seed=8)
-    b = (data.gyro - clean.gyro) / data.sample_interval  # (runs, samples), rad/s
+    assert np.array_equal(getattr(data, other), np.broadcast_to(getattr(clean, other), (n, 100)))
+    b = (getattr(data, sensor) - getattr(clean, sensor)) / data.sample_interval  # (runs, samples)
     k_tau = int(round(tau * ins.sample_rate))
+    assert b.shape == (n, 100) and 2 * k_tau - 1 < 100
     # Relative standard error of a variance from n normal draws: sqrt(2 / n) = 3.7 %;
     # 15 % is four of them. Started at zero the first variance would be ~0.04 sigma^2.
     for k in (0, k_tau, 2 * k_tau - 1):
@@ -305,6 +310,29 @@ def test_north_finder_gauss_markov_process_is_stationary_from_the_first_sample()
     rho = np.mean(b[:, 0] * b[:, k_tau]) / sigma**2
     # Standard error of a correlation estimate ~ (1 - rho^2) / sqrt(n) = 2.2 %; 0.1 is 4.5.
     assert rho == pytest.approx(math.exp(-1.0), abs=0.1)
+
+
+def test_north_finder_gyro_and_accel_bias_instabilities_are_independent():
+    # Both on: the two GM processes draw from their own normals, so their sample
+    # correlation over 1500 runs x 100 samples is ~0 (its standard error with a 0.6 s
+    # correlation time: about 1 / sqrt(1500 x 2 s / 1.2 s) = 0.02; 0.1 is five of them).
+    ins = Instrument(sample_rate=50.0, table_rate=6 * DEG)
+    grade = SensorGrade(
+        gyro_arw=0.0,
+        gyro_bias=0.0,
+        accel_vrw=0.0,
+        accel_bias=0.0,
+        gyro_bias_instability=2e-6,
+        gyro_correlation_time=0.6,
+        accel_bias_instability=3e-4,
+        accel_correlation_time=0.6,
+    )
+    pose = Pose(0.5, 0.3)
+    clean = simulate(pose, ins, grade.without_noise(), 2.0)
+    data = simulate(pose, ins, grade, 2.0, n_runs=1500, seed=3)
+    g = (data.gyro - clean.gyro).ravel()
+    a = (data.accel - clean.accel).ravel()
+    assert abs(np.corrcoef(g, a)[0, 1]) < 0.1
 
 
 def test_north_finder_random_walk_stand_in_has_the_gm_increment_variance():

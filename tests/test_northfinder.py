@@ -601,3 +601,40 @@ def test_cli_warns_near_the_pole(capsys):
     assert "polar band" in tags and "large errors" in tags
     assert main([*args[:2], "84", *args[3:]]) == 0
     assert "polar band" not in capsys.readouterr().out
+
+
+def test_coefficient_information_is_the_white_noise_information_of_whole_turns():
+    # Each increment over h is u . [A, B, eps'] + white noise of variance PSD h, with
+    # u = (int cos alpha, int sin alpha, h): information sum u u^T / (PSD h). Over a
+    # sample int cos alpha = h cos(alpha_mid) sinc(w h / 2), so over whole table turns
+    # the cos and sin entries are (T / 2) sinc^2(w h / 2) and the cross terms and
+    # sum h cos vanish: the gyro block is diag((T/2) s2, (T/2) s2, T) / ARW^2, the
+    # accelerometer block the same over VRW^2, and the blocks do not couple.
+    from inserr.northfinder.bounds import coefficient_information
+    from inserr.northfinder.instrument import Instrument, SensorGrade
+
+    # 7.5 Hz: 15 samples per 2 s period; no sample time is a multiple of a table period.
+    ins = Instrument(table_rate=6 * DEG_PER_S, sample_rate=7.5, filter_period=2.0)
+    grade = SensorGrade(gyro_arw=3e-6, accel_vrw=7e-4)
+    times, info = coefficient_information(ins, grade, 121.0)  # 60 whole periods: 2 turns
+    assert np.array_equal(times, 2.0 * np.arange(1, 61))
+    big_t, x = 120.0, 0.5 * ins.table_rate / ins.sample_rate
+    s2 = (math.sin(x) / x) ** 2  # 1 - 1.6e-5
+    for idx, psd in (([0, 1, 4], grade.gyro_arw**2), ([2, 3, 5], grade.accel_vrw**2)):
+        block = info[-1][np.ix_(idx, idx)] * psd
+        # Sums of 1200 terms: round-off ~1e-13 of T.
+        np.testing.assert_allclose(
+            block, np.diag([big_t / 2 * s2, big_t / 2 * s2, big_t]), rtol=1e-12, atol=1e-11
+        )
+    assert np.all(info[:, [0, 1, 4]][:, :, [2, 3, 5]] == 0.0)
+    # Information accumulates: after 7 periods (14 s, part of a turn) the constant's is
+    # 14 s / PSD whatever the turn.
+    assert info[6, 4, 4] * grade.gyro_arw**2 == pytest.approx(14.0, rel=1e-12)
+    assert info[6, 5, 5] * grade.accel_vrw**2 == pytest.approx(14.0, rel=1e-12)
+    # Without white noise on either sensor the bound is infinite: refused.
+    for bad in (
+        dataclasses.replace(grade, gyro_arw=0.0),
+        dataclasses.replace(grade, accel_vrw=0.0),
+    ):
+        with pytest.raises(InputError, match="infinite"):
+            coefficient_information(ins, bad, 121.0)
