@@ -350,3 +350,32 @@ def test_coupled_exo_is_the_input_block_times_the_exo_exponential(vertical):
     assert e_s.shape == (1, 1, model.layout.n - 9, model.layout.n - 9)
     want = sl.expm(model.matrix(w[1])[9:, 9:] * 7.5)
     assert np.allclose(e_s[0, 0], want, rtol=1e-12, atol=1e-13)
+
+
+def test_timeline_takes_sequences_and_refuses_what_is_not_a_timeline():
+    from inserr.core.errors import InputError
+
+    # Plain sequences become float arrays of the documented shapes (omega_n may come
+    # flat), and the labels default to one empty label per interval.
+    eye = np.eye(3).tolist()
+    tl = Timeline([0, 60, 90], [eye, eye, eye], [0.0, 0.0, 0.1, 0.0, 0.0, -0.1])
+    assert isinstance(tl.times, np.ndarray) and tl.times.dtype == float
+    assert isinstance(tl.c_sn, np.ndarray) and tl.c_sn.shape == (3, 3, 3)
+    assert isinstance(tl.omega_n, np.ndarray) and tl.omega_n.shape == (2, 3)
+    assert tl.omega_n[1, 2] == -0.1 and tl.labels == ("", "") and tl.duration == 90.0
+    still = Timeline.static(np.eye(3), 30.0, "hold")
+    assert still.labels == ("hold",) and np.array_equal(still.times, [0.0, 30.0])
+    assert np.array_equal(still.omega_n, np.zeros((1, 3)))
+    # Each condition on its own is refused.
+    c3, w2 = np.stack([np.eye(3)] * 3), np.zeros((2, 3))
+    for times, c, w in (
+        ([1.0, 60.0, 90.0], c3, w2),  # does not start at 0
+        ([0.0, 60.0, 60.0], c3, w2),  # a node repeated: an empty interval
+        ([0.0, 60.0, 30.0], c3, w2),  # decreasing
+        ([[0.0, 60.0, 90.0]], c3, w2),  # not one-dimensional
+        ([0.0], c3[:1], np.zeros((0, 3))),  # one node: no interval
+        ([0.0, 60.0, 90.0], c3[:2], w2),  # one attitude short
+        ([0.0, 60.0, 90.0], c3, np.zeros((3, 3))),  # one rate too many
+    ):
+        with pytest.raises(InputError, match="timeline"):
+            Timeline(np.array(times), c, w)
