@@ -379,3 +379,23 @@ def test_timeline_takes_sequences_and_refuses_what_is_not_a_timeline():
     ):
         with pytest.raises(InputError, match="timeline"):
             Timeline(np.array(times), c, w)
+
+
+def test_layout_blocks_are_where_the_documented_names_are():
+    # Every block a layout documents, read through layout[key], holds the states of
+    # that name (psi, dv, dr, nav first; then the carried error blocks in order).
+    lay = Layout(bias=True, scale_misalignment=True, bias_instability=True)
+    assert (lay["psi"], lay["dv"], lay["dr"], lay["nav"]) == (
+        slice(0, 3),
+        slice(3, 6),
+        slice(6, 9),
+        slice(0, 9),
+    )
+    prefixes = {"psi": "psi_", "dv": "dv_", "dr": "dr_", "eps": "eps_", "nabla": "nabla_",
+                "kg": "kg_", "ka": "ka_", "bg": "bg_", "ba": "ba_"}  # fmt: skip
+    for key, prefix in prefixes.items():
+        names = lay.names[lay[key]]
+        assert len(names) == (9 if key in ("kg", "ka") else 3)
+        assert all(n.startswith(prefix) for n in names), (key, names)
+    assert lay.names[lay["nav"]] == lay.names[:9] and lay.n == 9 + 6 + 18 + 6
+    assert set(Layout(bias=False).slices) == {"psi", "dv", "dr", "nav"}
