@@ -25,6 +25,7 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg as sl
+from scipy.spatial.transform import Rotation
 
 from inserr.core.earth import Site
 from inserr.core.imu import ImuErrors, InitialErrors
@@ -1091,3 +1092,51 @@ def test_white_noise_covariance_kept_for_reuse_is_a_fresh_copy_each_time():
     double = fp.white_noise_covariance(model, np.sqrt(2) * 1e-6, 0.0, t)
     alone = fp.white_noise_covariance(model, 1e-6, 0.0, t)
     np.testing.assert_allclose(double, 2 * alone, rtol=0, atol=1e-12 * np.abs(alone).max())
+
+
+def test_scan_in_several_blocks_equals_the_recurrence():
+    # Modes that grow or decay fast (|Re lambda| t far beyond SCAN_SPAN) make the scan
+    # restart its blocks many times; each state must still be the plain recurrence
+    # z_k = e^{lambda (t_k - t_{k-1})} z_{k-1} + incr_k (computed here step by step).
+    rng = np.random.default_rng(5)
+    lam = np.array([-3.0, 0.3 + 0.2j, -0.01 + 1j, 0.0])
+    t = np.cumsum(rng.uniform(0.5, 3.0, 400))  # ~700 s: |Re lambda| t up to 2000
+    incr = rng.normal(size=(400, 4, 2)) + 1j * rng.normal(size=(400, 4, 2))
+    z0 = rng.normal(size=(4, 2)) + 0j
+    got = fp.scan(lam, 0.0, z0, t, incr)
+    want, z, tz = np.empty_like(incr), z0, 0.0
+    for k in range(len(t)):
+        z = np.exp(lam * (t[k] - tz))[:, None] * z + incr[k]
+        want[k], tz = z, t[k]
+    # Relative to each mode's own size (one grows by e^210): round-off of ~400 steps.
+    scale = np.abs(want).max(axis=(0, 2))
+    assert np.all(np.abs(got - want).max(axis=(0, 2)) <= 1e-12 * scale)
+    assert 3.0 * t[-1] > 5 * fp.SCAN_SPAN  # several blocks indeed
+
+
+def test_group_sum_adds_rows_of_equal_keys_in_any_order():
+    v = np.arange(12.0).reshape(6, 2)
+    for keys in ([3, 1, 3, 0, 1, 3], [0, 0, 1, 3, 3, 3], [0, 1, 2, 4, 5, 7]):
+        keys = np.array(keys)
+        got_k, got_v = fp._group_sum(keys, v)
+        want_k = np.unique(keys)
+        want_v = np.array([v[keys == k].sum(axis=0) for k in want_k])
+        assert np.array_equal(got_k, want_k) and np.array_equal(got_v, want_v)
+    one_k, one_v = fp._group_sum(np.array([4]), v[:1])
+    assert np.array_equal(one_k, [4]) and np.array_equal(one_v, v[:1])
+
+
+def test_vehicle_to_imu_for_one_table_is_the_batched_transform():
+    # One table (2-D M) as a batch of one, and both against the features of C_b^n M
+    # computed directly (C, C w^s, C f^s with w^s = M^T w^b, f^s = M^T f^b).
+    rng = np.random.default_rng(9)
+    c_bn = Rotation.random(5, random_state=2).as_matrix()
+    w_b, f_b = rng.normal(size=(5, 3)), rng.normal(size=(5, 3))
+    m = Rotation.random(random_state=3).as_matrix()
+    y = fp._features(c_bn, w_b, f_b)  # (5, 63) vehicle features
+    direct = fp._features(c_bn @ m, w_b @ m, f_b @ m)
+    one = fp.vehicle_to_imu(y, m)
+    assert one.shape == y.shape
+    np.testing.assert_allclose(one, direct, rtol=0, atol=1e-14)
+    batched = fp.vehicle_to_imu(y[None], m[None])[0]
+    np.testing.assert_allclose(batched, one, rtol=0, atol=1e-15)
