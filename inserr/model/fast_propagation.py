@@ -812,9 +812,15 @@ def _lifted_coarse(lam: np.ndarray, t: np.ndarray, inputs: np.ndarray, lift, out
     n_per = -(-(len(t) - 1 - j0) // n_s)  # periods begun after t0
     z = np.empty((n_per,) + out.shape[1:], dtype=complex)
     z[0] = out[j0]
-    if n_per > 1:  # Z_k = e^{lambda P} Z_{k-1} + p_P: a scan with the same jump each period
-        starts = t[j0] + np.arange(1, n_per) * period
-        z[1:] = scan(lam, float(t[j0]), z[0], starts, np.broadcast_to(p[-1], z[1:].shape))
+    if n_per > 1:
+        # Z_k = e^{lambda P} Z_{k-1} + p_P = e^{lambda k P} Z_0 + g_k p_P with the geometric
+        # sum g_k = sum_{i<k} e^{lambda i P} = expm1(lambda k P) / expm1(lambda P) (= k
+        # for lambda = 0): two multiply-adds per period, no scan.
+        k = np.arange(1, n_per)[:, None]
+        lp = lam[None, :] * period
+        num, den = np.expm1(lp * k), np.expm1(lp)
+        g = np.where(den == 0, k + 0j, num / np.where(den == 0, 1.0, den))
+        z[1:] = (num + 1.0)[:, :, None] * z[0][None] + g[:, :, None] * p[-1][None]
     whole = (len(t) - 1 - j0) // n_s  # periods that end within the grid
     if whole > 1:
         rows = out[first + 1 : j0 + 1 + whole * n_s].reshape((whole - 1, n_s) + out.shape[1:])
@@ -884,11 +890,8 @@ def _tile(win: Windows, inputs: np.ndarray, t0: float, period: float, t_coarse: 
     first = np.flatnonzero(win.a >= t0 - MERGE)  # the periodic part of the base windows
     head = np.arange(first[0]) if len(first) else np.arange(len(win.a))
     reps = int(np.floor((end - t0) / period + 1e-9))
-    pieces_src = [head]
-    shifts = [np.zeros(len(head))]
-    for k in range(reps):
-        pieces_src.append(first)
-        shifts.append(np.full(len(first), k * period))
+    pieces_src = [head, np.tile(first, reps)]
+    shifts = [np.zeros(len(head)), np.repeat(np.arange(reps) * period, len(first))]
     rest = end - t0 - reps * period
     if rest > MERGE:
         tail = first[win.b[first] - t0 <= rest + MERGE]
