@@ -316,16 +316,6 @@ def test_bad_scenario_file_is_one_line_and_exit_2(text, tmp_path, monkeypatch):
     assert out == "" and snapshot(tmp_path) == before
 
 
-def test_a_step_that_does_not_turn_is_refused_by_the_library_too():
-    # A 0 deg step would have a zero turn time (|angle| / rate) and a 0 / 0 turn rate.
-    from inserr.schemes.open_loop import Step
-
-    for angle in (0.0, -0.0, float("nan"), float("inf")):
-        with pytest.raises(ValueError, match="must turn"):
-            Step("outer", angle, 10.0)
-    assert Step("outer", 1e-9, 10.0).angle == 1e-9  # any turn, however small, is a step
-
-
 def test_cycle_refuses_a_custom_table_that_does_not_return_to_its_start(tmp_path):
     path = tmp_path / "c.toml"
     rows = '[[scheme.steps]]\ngimbal = "inner"\nangle = "{}"\ndwell = "100 s"\n'

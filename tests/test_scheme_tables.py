@@ -197,3 +197,13 @@ def test_cycle_integrals_name_an_object_without_a_name():
 
     with pytest.raises(InputError, match="not a scheme has no fixed cycle"):
         cycle_integrals("not a scheme")
+
+
+def test_a_step_that_does_not_turn_is_refused_by_the_library_too():
+    # A 0 deg step would have a zero turn time (|angle| / rate) and a 0 / 0 turn rate.
+    from inserr.schemes.open_loop import Step
+
+    for angle in (0.0, -0.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="must turn"):
+            Step("outer", angle, 10.0)
+    assert Step("outer", 1e-9, 10.0).angle == 1e-9  # any turn, however small, is a step
