@@ -957,12 +957,16 @@ def test_grid_step_recognises_uniform_grids_from_zero():
     ("t0_steps", "period_steps", "count"),
     [(0, 22, 4321), (3, 7, 3 + 2 * 7 + 1), (5, 4, 5 + 2 * 4), (1, 6, 1 + 9 * 6 + 5), (0, 1, 500)],
 )
-def test_lifted_coarse_states_equal_the_scan(t0_steps, period_steps, count):
+@pytest.mark.parametrize("zero_mode", [False, True])
+def test_lifted_coarse_states_equal_the_scan(t0_steps, period_steps, count, zero_mode):
     # Inputs that repeat every period after t0 (anything before it): the per-period
     # recurrence must give the scan's states, whole periods, a cut last one, t0 > 0.
     # Both are the same sums in another order: round-off of the largest state (1e-13).
+    # With a mode at lambda = 0 the geometric sum of the period starts is k itself.
     rng = np.random.default_rng(t0_steps + count)
     lam = NavModes(ErrorModel(SITE, Layout(bias=False))).lam
+    if zero_mode:
+        lam = np.append(lam, 0.0)
     h = 60.0
     t = np.arange(count) * h
     shape = (len(lam), 5)

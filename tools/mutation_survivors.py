@@ -145,6 +145,39 @@ RULES: tuple[Rule, ...] = (
         r"_transitions?$|_grid_step|_restrict|_recurs|period",
     ),
     Rule(
+        "work partition or cache",
+        "where the scan restarts a block (so that e^{-lambda t} stays in floating-point "
+        "range) or whether _group_sum sorts first: every choice gives the same states "
+        "and sums (equal keys summed in another order differ by round-off only); the "
+        "tests compare the scan with the plain recurrence across many blocks and "
+        "_group_sum with sums by hand",
+        function=r"^x_scan$|^x__group_sum$",
+    ),
+    Rule(
+        "value already in range",
+        "a clip, a parity or a spare row of the Chebyshev integration: its nodes are "
+        "already in [-1, 1], (-1)^(k+1) = (-1)^(k-1), and the extra row is never read",
+        function=r"integral_of_series",
+    ),
+    Rule(
+        "unread model part",
+        "the navigation model that places the initial errors: only its nine navigation "
+        "states are read (the initial errors are navigation states, so the attitude and "
+        "the error blocks it might carry do not enter)",
+        function=r"^x_source_set$",
+        diff=r"nav_model|unit_column|np\.full\(n",
+        whole=True,
+    ),
+    Rule(
+        "faster path declined",
+        "how the lifted coarse states count the periods (a period left to the last, "
+        "partial, branch is computed there the same way) or the grid step read from a "
+        "grid that starts at 0: the same states",
+        function=r"_lifted_coarse",
+        diff=r"whole =|n_per =|h = float",
+        whole=True,
+    ),
+    Rule(
         "search heuristic",
         "inside the heuristic searches of a sign pattern (starting points, walk order, "
         "exhaustive block sizes, descent steps): the result moves but stays within the "
