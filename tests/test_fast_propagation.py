@@ -1144,3 +1144,20 @@ def test_vehicle_to_imu_for_one_table_is_the_batched_transform():
     np.testing.assert_allclose(one, direct, rtol=0, atol=1e-14)
     batched = fp.vehicle_to_imu(y[None], m[None])[0]
     np.testing.assert_allclose(batched, one, rtol=0, atol=1e-15)
+
+
+def test_white_noise_leaves_a_clamped_vertical_channel_still():
+    # With the vertical channel clamped, neither VRW nor anything else moves dv_U or dr_U:
+    # their variances and covariances stay exactly 0; free, VRW makes dv_U grow as VRW^2 t.
+    arw, vrw = 0.001 * DEG / 60.0, 10 * MICRO_G
+    t = output_grid(3600.0, 60.0)
+    clamped = fp.white_noise_covariance(ErrorModel(SITE, Layout(bias=False)), arw, vrw, t)
+    assert np.all(clamped[:, 5, :] == 0.0) and np.all(clamped[:, :, 8] == 0.0)
+    assert np.all(clamped[1:, 3, 3] > 0.0)  # the horizontal channels do move
+    free = fp.white_noise_covariance(
+        ErrorModel(SITE, Layout(bias=False), vertical="free"), arw, vrw, t
+    )
+    # Free, dv_U' = k dr_U + w with k = 2 g / R: P_vv = VRW^2 t (1 + k t^2 / 3 + O((k t^2)^2));
+    # after 60 s k t^2 = 0.011, so the next term is ~1e-5 of it: 1e-4 allows for it.
+    k = 2.0 * SITE.g / SITE.mean_radius
+    assert free[1, 5, 5] == pytest.approx(vrw**2 * 60.0 * (1 + k * 60.0**2 / 3), rel=1e-4)

@@ -178,6 +178,101 @@ RULES: tuple[Rule, ...] = (
         whole=True,
     ),
     Rule(
+        "tie or tolerance edge",
+        "the worst-case walk's start vertex for a source with x exactly 0, or its crossing "
+        "angle offset by pi (the angles are taken mod pi: the same order): only exact "
+        "ties move",
+        function=r"^x__walk$",
+        diff=r"s0 = |theta",
+        whole=True,
+    ),
+    Rule(
+        "unread sentinel or diagnostic",
+        "a value computed but not read: signs returned where only the norm is asked for, "
+        "the fields of ConstantErrorResponse and _Run that no caller reads (its time grids, "
+        "its SourceSet), phi1's and the rotation axis's placeholder at zero (replaced or "
+        "multiplied by a zero angle), a lookup's default index (-1 or -2, never used)",
+        function=r"worst_case_norm|pattern_maximum|_constant_error_response|"
+        r"xǁ_Runǁ__init__|phi1|TimelineHistoryǁevaluate|_source_inputs|signed_coefficients",
+        diff=r"or True|None, fine|t_coarse, coarse|None, coarse|self\.sources|"
+        r"1\.0, z|rate, (1|2)\.0|default=|-1, 9|-2, 9",
+        whole=True,
+    ),
+    Rule(
+        "faster path declined",
+        "the constant-response set-up: the phase step or the fine-output tables not "
+        "prepared ahead (they are then made when first needed, or the general path "
+        "runs), a two-point coarse grid taken by the general scan, or a timeline's "
+        "pieces not marked constant (the general windows then integrate them): the same "
+        "numbers",
+        function=r"_constant_error_response|TimelineHistoryǁpieces",
+    ),
+    Rule(
+        "work partition or cache",
+        "the key under which a static (zero-rate) transition is cached, or the rate "
+        "used to pick the sub-step: another cache slot or a safer step, same transitions",
+        function=r"DiscretizerǁDiscretizerǁkey|Discretizerǁkey|Discretizerǁ__init__",
+    ),
+    Rule(
+        "tie or tolerance edge",
+        "the step engine's merge distance of 10 time quanta made 11: nodes closer than "
+        "that are one node either way",
+        function=r"make_steps",
+        diff=r"1<0->1> \* DT_QUANTUM",
+    ),
+    Rule(
+        "same operation spelled otherwise",
+        "the Gauss-Markov covariance's scans start from a zero state (their start time is "
+        "then irrelevant), a covariance already symmetric symmetrized again, "
+        "reduceat's default axis, the window's coarse index it never reads",
+        function=r"x__gauss_markov$|white_noise_covariance",
+        diff=r"scan\(mu, 1\.0|scan\(nu\.ravel\(\), 1\.0|swapaxes\([a-z]+, 2, 2\)|"
+        r"nd\.first, \)|win\.phase, None|3:7\]",
+        whole=True,
+    ),
+    Rule(
+        "quadrature resolution",
+        "the Gauss-Markov covariance's node count or phase budget (8 -> 9 nodes, a "
+        "budget from 3 instead of 2 times the fastest mode): converged either way",
+        function=r"x__gauss_markov$",
+        diff=r"np\.maximum\(win\.n, 9\)|3\.0 \* float",
+        whole=True,
+    ),
+    Rule(
+        "unread model part",
+        "a source's value set (=) instead of added (+=) into its matrix entry: the same "
+        "unless two sources share an entry, which constant_sources never makes; the "
+        "error blocks a layout carries, unused by the fast engine (it treats IMU errors "
+        "as inputs); the default of the vertical mode, which every caller passes",
+        function=r"SourceSetǁsigned|layout_for|constant_sources",
+        diff=r"\+= v|bias|vertical: str",
+        whole=True,
+    ),
+    Rule(
+        "dtype, shape or strictness argument",
+        "vehicle_to_imu's squeeze flag and result dtype: its callers pass 3-D stacks of one dtype",
+        function=r"vehicle_to_imu",
+        diff=r"squeeze|result_type",
+        whole=True,
+    ),
+    Rule(
+        "same operation spelled otherwise",
+        "the diagonal scaling of the navigation block before its eigen-decomposition "
+        "(a similarity for conditioning: any positive scale gives the same modes once "
+        "undone), and the real eigenvalues' imaginary round-off kept or not",
+        function=r"NavModesǁ__post_init__",
+        diff=r"scale_all|lam\.real|np\.where\(None",
+        whole=True,
+    ),
+    Rule(
+        "tie or tolerance edge",
+        "an interval looked up at a node time from the other side (searchsorted's side "
+        "dropped): the attitude is continuous there, so either interval gives it",
+        diff=r'<, side="right"->>|side="right"\) - 1, <0->None>|<0->None>, len|'
+        r"len\(self\.omega_n\) <-->\+>|len\(self\.omega_n\) - <1->2>",
+        function=r"attitude_at|interval_index|ScheduleHistoryǁ__init__",
+    ),
+    Rule(
         "search heuristic",
         "inside the heuristic searches of a sign pattern (starting points, walk order, "
         "exhaustive block sizes, descent steps): the result moves but stays within the "
