@@ -279,6 +279,14 @@ def test_bias_instability_psd_integrates_to_the_gm_variance():
     assert bias_instability_psd(sigma, tau, 0.0) == pytest.approx(2 * sigma**2 * tau, rel=1e-15)
 
 
+def _bias_instability_only(**instability) -> SensorGrade:
+    """A north-finder grade whose only errors are the given bias instabilities (no white
+    noise, no constant bias; an instability not given is 0)."""
+    base = {"gyro_bias_instability": 0.0, "accel_bias_instability": 0.0}
+    return SensorGrade(gyro_arw=0.0, gyro_bias=0.0, accel_vrw=0.0, accel_bias=0.0,
+                       **{**base, **instability})  # fmt: skip
+
+
 @pytest.mark.parametrize("sensor", ["gyro", "accel"])
 def test_north_finder_gauss_markov_process_is_stationary_from_the_first_sample(sensor):
     # Ensemble over 1500 runs at fixed sample indices: variance sigma^2 at t = 0, t = tau
@@ -287,13 +295,8 @@ def test_north_finder_gauss_markov_process_is_stationary_from_the_first_sample(s
     sigma, tau = (2e-6, 1.0) if sensor == "gyro" else (3e-4, 0.8)
     other = "accel" if sensor == "gyro" else "gyro"
     ins = Instrument(sample_rate=50.0, table_rate=6 * DEG)
-    grade = SensorGrade(
-        gyro_arw=0.0,
-        gyro_bias=0.0,
-        accel_vrw=0.0,
-        accel_bias=0.0,
-        **{f"{sensor}_bias_instability": sigma, f"{sensor}_correlation_time": tau},
-        **{f"{other}_bias_instability": 0.0},
+    grade = _bias_instability_only(
+        **{f"{sensor}_bias_instability": sigma, f"{sensor}_correlation_time": tau}
     )
     pose = Pose(0.5, 0.3)
     n = 1500
@@ -317,11 +320,7 @@ def test_north_finder_gyro_and_accel_bias_instabilities_are_independent():
     # correlation over 1500 runs x 100 samples is ~0 (its standard error with a 0.6 s
     # correlation time: about 1 / sqrt(1500 x 2 s / 1.2 s) = 0.02; 0.1 is five of them).
     ins = Instrument(sample_rate=50.0, table_rate=6 * DEG)
-    grade = SensorGrade(
-        gyro_arw=0.0,
-        gyro_bias=0.0,
-        accel_vrw=0.0,
-        accel_bias=0.0,
+    grade = _bias_instability_only(
         gyro_bias_instability=2e-6,
         gyro_correlation_time=0.6,
         accel_bias_instability=3e-4,
