@@ -272,11 +272,16 @@ def test_accel_bias_instability_drives_the_schuler_loop_as_a_reference_lti():
 def test_bias_instability_psd_integrates_to_the_gm_variance():
     # Two-sided PSD: int S(w) dw / (2 pi) over all w = sigma^2 (the process variance).
     sigma, tau = 3e-7, 250.0
-    total, _ = quad(lambda w: bias_instability_psd(sigma, tau, w), -np.inf, np.inf)
-    # quad over an infinite range of a Lorentzian: ~1e-10 relative.
-    assert total / (2 * math.pi) == pytest.approx(sigma**2, rel=1e-8)
+    # Integrated in u = w tau, where the Lorentzian has unit width (in w itself, 1/tau =
+    # 0.004 rad/s wide, quad's infinite-range rule misses 4.5 % of it); ~1e-10 relative.
+    # abs=0 throughout: pytest.approx with rel alone accepts anything within 1e-12, and
+    # sigma^2 is 9e-14.
+    total, _ = quad(lambda u: bias_instability_psd(sigma, tau, u / tau) / tau, -np.inf, np.inf)
+    assert total / (2 * math.pi) == pytest.approx(sigma**2, rel=1e-8, abs=0)
     # Low-frequency limit 2 sigma^2 tau: the Allan-plateau convention, independent check.
-    assert bias_instability_psd(sigma, tau, 0.0) == pytest.approx(2 * sigma**2 * tau, rel=1e-15)
+    assert bias_instability_psd(sigma, tau, 0.0) == pytest.approx(
+        2 * sigma**2 * tau, rel=1e-15, abs=0
+    )
 
 
 def _bias_instability_only(**instability) -> SensorGrade:
@@ -349,11 +354,13 @@ def test_north_finder_random_walk_stand_in_has_the_gm_increment_variance():
     period = ins.filter_period
     for idx, (s, tau) in ((4, (4e-8, 300.0)), (5, (5e-5, 400.0))):
         want = 2 * s**2 * (1 - math.exp(-period / tau))
-        assert kf.Q[idx, idx] == pytest.approx(want, rel=5e-3)
+        # abs=0: pytest.approx with rel alone still accepts anything within 1e-12, and
+        # these entries are ~1e-17 (rad/s)^2 and ~1e-11 (m/s^2)^2.
+        assert kf.Q[idx, idx] == pytest.approx(want, rel=5e-3, abs=0)
     # R: the mean over a period T of white noise of PSD ARW^2 has variance ARW^2 / T
     # (T = 0.5 s, so that R = PSD x T would be told apart).
-    assert kf.R[0, 0] == pytest.approx(grade.gyro_arw**2 / period, rel=1e-12)
-    assert kf.R[1, 1] == pytest.approx(grade.accel_vrw**2 / period, rel=1e-12)
+    assert kf.R[0, 0] == pytest.approx(grade.gyro_arw**2 / period, rel=1e-12, abs=0)
+    assert kf.R[1, 1] == pytest.approx(grade.accel_vrw**2 / period, rel=1e-12, abs=0)
 
 
 def _gm_dominated_grade(ins: Instrument, tau: float, ratio: float) -> SensorGrade:
@@ -430,8 +437,8 @@ def test_turning_imu_modulates_its_gyro_bias_instability():
     # What is left is the Earth rate's horizontal part, W cos L = 1.3e-7 rad/s, leaking the
     # 100 x larger up variance into the tilts: ~100 (W cos L t)^2 / 3 < 1e-6. A static IMU
     # would give ~(w tau)^2 = 110 times the horizontal value, a w off by W 0.4 % less.
-    assert p[1:, 0, 0] + p[1:, 1, 1] == pytest.approx(horizontal[1:], rel=1e-3)
-    assert p[1:, 2, 2] == pytest.approx(up[1:], rel=1e-3)
+    assert p[1:, 0, 0] + p[1:, 1, 1] == pytest.approx(horizontal[1:], rel=1e-3, abs=0)
+    assert p[1:, 2, 2] == pytest.approx(up[1:], rel=1e-3, abs=0)
 
 
 def test_covariance_outputs_that_start_after_zero_are_the_same_numbers():

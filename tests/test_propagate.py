@@ -161,7 +161,7 @@ def test_covariance_is_symmetric_psd_after_30_days_and_grows_like_random_walk():
         d2, Timeline.static(np.eye(3), 600.0), np.zeros((9, 9)), np.array([0.0, 600.0])
     )
     # (Omega t)^2 leakage between psi components: < 1e-3 relative over 10 min.
-    assert p2[-1, 2, 2] == pytest.approx(imu.arw**2 * 600.0, rel=1e-3)
+    assert p2[-1, 2, 2] == pytest.approx(imu.arw**2 * 600.0, rel=1e-3, abs=0)
 
 
 def test_noise_covariance_matches_monte_carlo_of_the_discrete_model():

@@ -100,9 +100,9 @@ def test_drift_result_rms_and_worst_are_those_of_its_per_source_responses():
     v = res.source_horizontal  # (Mc, N, 2), metres, scaled by the magnitudes
     assert v.shape[1] == 7
     rss = np.sqrt(np.sum(v**2, axis=(1, 2)))
-    assert res.rms_horizontal == pytest.approx(rss, rel=1e-13)
+    assert res.rms_horizontal == pytest.approx(rss, rel=1e-13, abs=0)
     brute = np.array([_brute_force(v[k]) for k in range(len(v))])
-    assert res.worst_horizontal == pytest.approx(brute, rel=1e-12)
+    assert res.worst_horizontal == pytest.approx(brute, rel=1e-12, abs=0)
     m = res.metrics
     assert m["rms_horizontal_error_nmi"] == pytest.approx(rss.max() / NMI, rel=1e-13)
     assert m["worst_case_horizontal_error_nmi"] == pytest.approx(brute.max() / NMI, rel=1e-12)
@@ -125,7 +125,7 @@ def test_worst_case_norm_matches_brute_force_on_many_random_sets():
     signs = np.array(list(itertools.product((-1.0, 1.0), repeat=n)))  # (512, n)
     brute = np.linalg.norm(np.einsum("pn,snd->spd", signs, v), axis=-1).max(axis=1)
     norm, best = worst_case_norm(v)
-    assert norm == pytest.approx(brute, rel=1e-12)
+    assert norm == pytest.approx(brute, rel=1e-12, abs=0)
     assert np.linalg.norm(np.einsum("sn,snd->sd", best, v), axis=-1) == pytest.approx(
         brute, rel=1e-12
     )

@@ -273,6 +273,26 @@ RULES: tuple[Rule, ...] = (
         function=r"attitude_at|interval_index|ScheduleHistoryǁ__init__",
     ),
     Rule(
+        "same operation spelled otherwise",
+        "the white-noise closed form zeroes the vertical-velocity input row of a clamped "
+        "model, but the clamped model's modes leave dv_U out altogether (NavModes keeps "
+        "states 0-4, 6, 7), so that row never reaches a mode: the zeroing is redundant "
+        "(checked by applying the mutant by hand), and the clamped channel's variances "
+        "are tested to stay exactly 0",
+        function=r"white_noise_covariance",
+        diff=r"clamped|g\[5, :\]|g\[6, :\]",
+        whole=True,
+    ),
+    Rule(
+        "same operation spelled otherwise",
+        "the lifted coarse states' geometric sum: the inner guard only keeps a division "
+        "finite where the outer choice discards its result (modes with e^{lambda P} = 1), "
+        "and k - 0j is k + 0j",
+        function=r"_lifted_coarse",
+        diff=r"np\.where\(den == 0, k|num / np\.where",
+        whole=True,
+    ),
+    Rule(
         "search heuristic",
         "inside the heuristic searches of a sign pattern (starting points, walk order, "
         "exhaustive block sizes, descent steps): the result moves but stays within the "
