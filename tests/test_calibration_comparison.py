@@ -149,7 +149,7 @@ def test_implied_arw_solves_back():
     w = 5e-11
     k = np.mean((c / p) ** 2)
     z = np.full(4, math.sqrt(1 + w**2 * k))  # RMS exactly sqrt(1 + w^2 k)
-    assert implied_arw(z, c, p) == pytest.approx(w, rel=1e-12)
+    assert implied_arw(z, c, p) == pytest.approx(w, rel=1e-12, abs=0)  # w = 5e-11: abs=0
     assert implied_arw(np.full(4, 0.9), c, p) is None
 
 
