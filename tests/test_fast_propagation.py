@@ -1161,3 +1161,22 @@ def test_white_noise_leaves_a_clamped_vertical_channel_still():
     # after 60 s k t^2 = 0.011, so the next term is ~1e-5 of it: 1e-4 allows for it.
     k = 2.0 * SITE.g / SITE.mean_radius
     assert free[1, 5, 5] == pytest.approx(vrw**2 * 60.0 * (1 + k * 60.0**2 / 3), rel=1e-4)
+
+
+def test_sampled_windows_in_many_chunks_equal_one_chunk(monkeypatch):
+    # The turns on the swing are sampled in chunks of CHUNK_NODES nodes (memory); cut
+    # into chunks of ~300 nodes, every output must be the same sums (to round-off).
+    dur = 3600.0
+    hist = ScheduleHistory(
+        build_scheme("flexible-two-position", 6 * DEG, 300.0).plan(SWING, dur), SWING, dur
+    )
+    one = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    assert one.engine["windows"]["direct"] >= 10  # the turns of the first hour
+    monkeypatch.setattr(fp, "CHUNK_NODES", 300)
+    many = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    assert _relative(many.nav, one.nav) < 1e-12
+    n = len(one.t_cov)
+    assert (
+        _relative(many.source_horizontal.reshape(n, -1), one.source_horizontal.reshape(n, -1))
+        < 1e-12
+    )

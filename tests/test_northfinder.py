@@ -631,6 +631,15 @@ def test_coefficient_information_is_the_white_noise_information_of_whole_turns()
     # 14 s / PSD whatever the turn.
     assert info[6, 4, 4] * grade.gyro_arw**2 == pytest.approx(14.0, rel=1e-12)
     assert info[6, 5, 5] * grade.accel_vrw**2 == pytest.approx(14.0, rel=1e-12)
+    # The filter, like the bound, refuses a grade without white noise on either sensor.
+    from inserr.northfinder.filter import make_filter
+
+    for bad in (
+        dataclasses.replace(grade, gyro_arw=0.0),
+        dataclasses.replace(grade, accel_vrw=0.0),
+    ):
+        with pytest.raises(InputError, match="ARW and VRW"):
+            make_filter(ins, bad)
     # Without white noise on either sensor the bound is infinite: refused.
     for bad in (
         dataclasses.replace(grade, gyro_arw=0.0),
