@@ -399,3 +399,18 @@ def test_layout_blocks_are_where_the_documented_names_are():
         assert all(n.startswith(prefix) for n in names), (key, names)
     assert lay.names[lay["nav"]] == lay.names[:9] and lay.n == 9 + 6 + 18 + 6
     assert set(Layout(bias=False).slices) == {"psi", "dv", "dr", "nav"}
+
+
+def test_vertical_initial_errors_count_only_with_a_free_vertical_channel():
+    # Clamped, the vertical velocity and position errors are dropped; free, each counts
+    # with its own value (neither scaled nor dropped), the horizontal ones either way.
+    from inserr.core.imu import ImuErrors, InitialErrors
+    from inserr.model.error_sources import constant_sources
+
+    init = InitialErrors(velocity=np.array([0.1, 0.2, 0.3]), position=np.array([4.0, 5.0, 6.0]))
+    for vertical, kept in (("clamped", {}), ("free", {"initial_velocity_u": 0.3,
+                                                     "initial_position_u": 6.0})):  # fmt: skip
+        got = {s.name: s.value for s in constant_sources(ImuErrors(), init, vertical)}
+        want = {"initial_velocity_e": 0.1, "initial_velocity_n": 0.2,
+                "initial_position_e": 4.0, "initial_position_n": 5.0, **kept}  # fmt: skip
+        assert got == want, vertical
