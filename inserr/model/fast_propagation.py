@@ -947,14 +947,13 @@ class _Run:
         for :meth:`add_inputs` to add later (a stage running beside another).
         """
         form = self.source_form  # (R, 63, N)
-        if sink is not None:
-            per = np.empty((len(j), form.shape[0], form.shape[2]), dtype=complex)
-            for r in range(form.shape[0]):
-                per[:, r, :] = y[:, r, :] @ form[r]
-            sink.append((j, per))
-            return
+        per = np.empty((len(j), form.shape[0], form.shape[2]), dtype=complex)
         for r in range(form.shape[0]):
-            self.inputs[j, r, :] += y[:, r, :] @ form[r]
+            per[:, r, :] = y[:, r, :] @ form[r]
+        if sink is not None:
+            sink.append((j, per))
+        else:
+            self.add_inputs([(j, per)])
 
     def add_inputs(self, sink: list) -> None:
         """Add the per-source inputs a stage left in ``sink`` (:meth:`_add_features`),
