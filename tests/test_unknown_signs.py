@@ -204,3 +204,24 @@ def test_vertical_initial_errors_are_dropped_when_the_vertical_channel_is_clampe
     free = analyze_drift(site, ImuErrors(), init, tl, dt_cov=600.0, vertical="free")
     assert [s.name for s in free.sources] == ["initial_velocity_u", "initial_position_u"]
     assert free.nav[-1, 8] > 100.0
+
+
+def test_worst_case_norm_is_exact_on_axes_ties_and_zero_vectors():
+    # Small integer vectors: many on the axes (x = 0 with either sign of y, y = 0),
+    # zeros, duplicates, opposites and equal angles, where the crossing order is a tie
+    # and the half-plane rule (x = 0: y >= 0) decides. Brute force over 2^7 patterns;
+    # integer sums are exact, so the norms agree to the last bit but for the sqrt.
+    rng = np.random.default_rng(5)
+    v = rng.integers(-2, 3, size=(600, 7, 2)).astype(float)
+    v[:100, :, 0] = 0.0  # all on the y axis
+    v[100:200, :, 1] = 0.0  # all on the x axis
+    v[200:250] = 0.0  # no error at all (t = 0 of a run without initial errors)
+    v[250:300, 1] = -v[250:300, 0]  # opposite pairs
+    v[300:350, 2] = 2 * v[300:350, 3]  # same angle, different lengths
+    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=7)))
+    brute = np.linalg.norm(np.einsum("pn,snd->spd", signs, v), axis=-1).max(axis=1)
+    norm, best = worst_case_norm(v)
+    assert norm == pytest.approx(brute, rel=1e-15, abs=0)
+    assert np.all(np.abs(best) == 1.0)
+    reached = np.linalg.norm(np.einsum("sn,snd->sd", best, v), axis=-1)
+    assert reached == pytest.approx(brute, rel=1e-15, abs=0)

@@ -80,28 +80,38 @@ def _walk(vv: np.ndarray, signs: bool = True) -> tuple[np.ndarray, np.ndarray | 
     """:func:`worst_case_norm` of (T, N, 2) vectors (N >= 1).
 
     Directions u and -u give opposite vertices of equal norm, so half a turn of u,
-    theta in (0, pi], visits every vertex up to sign: each v_i is crossed once, at
-    ``theta_i = (ang_i + pi/2) mod pi`` (where v_i . u changes sign).
+    theta in (0, pi], visits every vertex up to sign. ``v_i`` and ``-v_i`` span the same
+    zonotope, so each vector is first turned into the half-plane ``x > 0`` (``x = 0``:
+    ``y >= 0``), where its sign is +1 just after theta = 0 (u = (1, 0+)); ``w_i . u``
+    then changes sign once, at the angle of ``w_i`` plus pi/2, so the sources are
+    crossed in the order of their angles in (-pi/2, pi/2]. That order is the order of
+    the pseudo-angle ``y / (x + |y|)`` (monotone there; no arctan). Sources at equal
+    angles may be crossed in either order: the vertices between them are inside the
+    zonotope and never beat the true ones, so the maximum is the same.
     """
     t_n, n = vv.shape[0], vv.shape[1]
-    # Signs just after theta = 0, u = (1, 0+): sign of v_x, ties by the sign of v_y.
-    s0 = np.where((vv[..., 0] > 0) | ((vv[..., 0] == 0) & (vv[..., 1] >= 0)), 1.0, -1.0)
-    theta = (np.arctan2(vv[..., 1], vv[..., 0]) + 0.5 * np.pi) % np.pi
-    theta[theta == 0.0] = np.pi  # crossed at 0 already counted in s0: cross it last
-    order = np.argsort(theta, axis=-1)
-    step = -2.0 * (s0[..., None] * vv)  # crossing v_i flips s_i
-    step = np.take_along_axis(step, order[..., None], axis=-2)
-    start = np.einsum("tn,tnd->td", s0, vv)
-    verts = np.concatenate([start[:, None, :], start[:, None, :] + np.cumsum(step, axis=-2)], 1)
-    norms = np.hypot(verts[..., 0], verts[..., 1])  # (T, N + 1)
-    best = np.argmax(norms, axis=-1)  # the best vertex has crossed ``best`` sources
-    norm = norms[np.arange(t_n), best]
+    x, y = vv[..., 0], vv[..., 1]
+    s0 = np.where((x > 0) | ((x == 0) & (y >= 0)), 1.0, -1.0)
+    wx, wy = s0 * x, s0 * y  # (T, N), wx >= 0
+    den = wx + np.abs(wy)
+    key = np.divide(wy, den, out=np.zeros_like(wy), where=den > 0)  # zero vectors: anywhere
+    order = np.argsort(key, axis=-1)
+    flat = (order + (n * np.arange(t_n))[:, None]).ravel()
+    sx, sy = wx.sum(axis=1), wy.sum(axis=1)  # the vertex of all signs +1
+    # The vertex after crossing the first k sources: start - 2 (w_(1) + ... + w_(k)).
+    vx = sx[:, None] - 2.0 * np.cumsum(wx.ravel()[flat].reshape(t_n, n), axis=1)
+    vy = sy[:, None] - 2.0 * np.cumsum(wy.ravel()[flat].reshape(t_n, n), axis=1)
+    sq = vx * vx + vy * vy  # (T, N)
+    k = np.argmax(sq, axis=1)
+    top = sq[np.arange(t_n), k]
+    at_start = sx * sx + sy * sy >= top  # the best vertex has crossed ``best`` sources
+    best = np.where(at_start, 0, k + 1)
+    norm = np.sqrt(np.where(at_start, sx * sx + sy * sy, top))
     if not signs:
         return norm, None
     rank = np.empty_like(order)
     np.put_along_axis(rank, order, np.arange(n)[None, :].repeat(t_n, 0), axis=-1)
-    signs = np.where(rank < best[:, None], -s0, s0)
-    return norm, signs
+    return norm, np.where(rank < best[:, None], -s0, s0)
 
 
 # --- every sign pattern at once: the range of a figure over the patterns ----------------
