@@ -985,9 +985,14 @@ class _Run:
         if not len(idx):
             return
         length = win.b[idx] - win.a[idx]
-        feats = self._imu_features(0.5 * (win.a[idx] + win.b[idx]), win.piece[idx])
+        # A still piece holds one attitude: its features (and inputs) once per piece, at
+        # the middle of its first window, for all its windows (a stop cut by the coarse
+        # grid into many).
+        _, first, of_piece = np.unique(win.piece[idx], return_index=True, return_inverse=True)
+        sel = idx[first]
+        feats = self._imu_features(0.5 * (win.a[sel] + win.b[sel]), win.piece[sel])
         wt = length[:, None] * phi1(self.lam[None, :] * length[:, None])  # int_0^L e^{lambda s}
-        u = _apply_form(feats, self.a_sig)
+        u = _apply_form(feats, self.a_sig)[of_piece]
         self.u_still[idx] = u
         self.incr[idx] = wt * u
         w = wt * self._to_coarse(win.b[idx], win.coarse[idx])
@@ -995,8 +1000,8 @@ class _Run:
         # window weights (per mode) and the sum per coarse interval.
         form = self.source_form  # (R, 63, N)
         flat = np.moveaxis(form, 1, 0).reshape(N_FEATURES, -1)  # (63, R N)
-        per = (feats @ flat.real + 1j * (feats @ flat.imag)).reshape(len(idx), *form.shape[::2])
-        jj, sums = _group_sum(win.coarse[idx], per * w[:, :, None])
+        per = (feats @ flat.real + 1j * (feats @ flat.imag)).reshape(len(sel), *form.shape[::2])
+        jj, sums = _group_sum(win.coarse[idx], per[of_piece] * w[:, :, None])
         self.inputs[jj] += sums
 
     # --- rotation windows: constant angular velocity, closed forms ---------------------
