@@ -1128,6 +1128,24 @@ def test_group_sum_adds_rows_of_equal_keys_in_any_order():
     assert np.array_equal(one_k, [4]) and np.array_equal(one_v, v[:1])
 
 
+def test_group_sum_of_mostly_single_rows_is_reduceat_to_the_bit():
+    # Sorted keys where most groups are one row (a stop cut by the coarse grid): pairs
+    # are added directly and longer groups by reduceat on their own. The sums must be
+    # reduceat's over all groups, to the last bit (the engine promises results that do
+    # not depend on the path), whichever group comes last.
+    rng = np.random.default_rng(11)
+    for trial in range(60):
+        n = int(rng.integers(2, 300))
+        keys = np.sort(rng.integers(0, max(2, int(n * rng.uniform(0.7, 1.5))), n))
+        if trial % 2:
+            keys = np.concatenate([keys, [keys[-1] + 1] * 3])  # a long group last
+        v = rng.normal(size=(len(keys), 2, 3)) + 1j * rng.normal(size=(len(keys), 2, 3))
+        start = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]]))
+        got_k, got_v = fp._group_sum(keys, v)
+        assert np.array_equal(got_k, keys[start])
+        assert np.array_equal(got_v, np.add.reduceat(v, start, axis=0))
+
+
 def test_vehicle_to_imu_for_one_table_is_the_batched_transform():
     # One table (2-D M) as a batch of one, and both against the features of C_b^n M
     # computed directly (C, C w^s, C f^s with w^s = M^T w^b, f^s = M^T f^b).

@@ -509,8 +509,13 @@ def scan(lam: np.ndarray, t0: float, z0: np.ndarray, t: np.ndarray, incr: np.nda
         else:
             stop = len(t)
         dt = (t[k:stop] - tz).reshape((-1, 1) + extra)
-        acc = np.cumsum(np.exp(-lam_b * dt) * incr[k:stop], axis=0)
-        out[k:stop] = np.exp(lam_b * dt) * (z[None] + acc)
+        # In place in the output block (the same operations as
+        # e^{lambda dt} (z + cumsum(e^{-lambda dt} incr)), without three temporaries).
+        blk = out[k:stop]
+        np.multiply(np.exp(-lam_b * dt), incr[k:stop], out=blk)
+        np.cumsum(blk, axis=0, out=blk)
+        blk += z[None]
+        blk *= np.exp(lam_b * dt)
         z, tz = out[stop - 1], t[stop - 1]
         k = stop
     return out
@@ -1767,8 +1772,23 @@ def _group_sum(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.nda
     else:
         order = np.argsort(keys, kind="stable")
         k, v = keys[order], values[order]
-    start = np.flatnonzero(np.concatenate([[True], k[1:] != k[:-1]]))
-    return k[start], np.add.reduceat(v, start, axis=0)
+    first = np.concatenate([[True], k[1:] != k[:-1]])
+    start = np.flatnonzero(first)
+    if 4 * len(start) < 3 * len(k):
+        return k[start], np.add.reduceat(v, start, axis=0)
+    # Mostly single rows (a stop cut by the coarse grid, a turn in a few intervals): the
+    # first row of each group, plus the second for pairs; longer groups by reduceat on
+    # their own (which sums them in its own order: the result is reduceat's to the bit).
+    out = v[start]
+    size = np.diff(np.append(start, len(k)))
+    two = np.flatnonzero(size == 2)
+    out[two] += v[start[two] + 1]
+    big = np.flatnonzero(size > 2)
+    if len(big):
+        edges = np.stack([start[big], start[big] + size[big]], axis=1).ravel()
+        sums = np.add.reduceat(v, edges[edges < len(k)], axis=0)
+        out[big] = sums[::2]
+    return k[start], out
 
 
 def _window_sums(nd: _Nodes, n: np.ndarray, wt: np.ndarray, feats: np.ndarray) -> np.ndarray:
