@@ -1134,13 +1134,23 @@ def test_group_sum_of_mostly_single_rows_is_reduceat_to_the_bit():
     # reduceat's over all groups, to the last bit (the engine promises results that do
     # not depend on the path), whichever group comes last.
     rng = np.random.default_rng(11)
+    fixed = [
+        [0, 1, 2, 3, 4, 5, 6, 7, 8, 8, 8],
+        [0, 1, 2, 3, 4, 5, 6, 7, 8, 8],
+        [0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8],
+        [0, 1, 1, 1, 2, 3, 4, 5, 5, 6, 7, 8, 9],
+    ]
+    drawn = []
     for trial in range(60):
-        n = int(rng.integers(2, 300))
-        keys = np.sort(rng.integers(0, max(2, int(n * rng.uniform(0.7, 1.5))), n))
-        if trial % 2:
-            keys = np.concatenate([keys, [keys[-1] + 1] * 3])  # a long group last
-        v = rng.normal(size=(len(keys), 2, 3)) + 1j * rng.normal(size=(len(keys), 2, 3))
+        n = int(rng.integers(4, 300))
+        # Mostly single rows: a few repeats among distinct sorted keys.
+        keys = np.sort(np.concatenate([np.arange(n), rng.integers(0, n, int(n * 0.15))]))
+        tail = [[], [n] * 2, [n] * 3][trial % 3]  # ends with a single, a pair, a long group
+        drawn.append(np.concatenate([keys, tail]).astype(int))
+    for keys in [np.array(k) for k in fixed] + drawn:
         start = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]]))
+        assert 4 * len(start) >= 3 * len(keys)  # the path for mostly single rows
+        v = rng.normal(size=(len(keys), 2, 3)) + 1j * rng.normal(size=(len(keys), 2, 3))
         got_k, got_v = fp._group_sum(keys, v)
         assert np.array_equal(got_k, keys[start])
         assert np.array_equal(got_v, np.add.reduceat(v, start, axis=0))

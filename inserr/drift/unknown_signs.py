@@ -101,12 +101,14 @@ def _walk(vv: np.ndarray, signs: bool = True) -> tuple[np.ndarray, np.ndarray | 
     # The vertex after crossing the first k sources: start - 2 (w_(1) + ... + w_(k)).
     vx = sx[:, None] - 2.0 * np.cumsum(wx.ravel()[flat].reshape(t_n, n), axis=1)
     vy = sy[:, None] - 2.0 * np.cumsum(wy.ravel()[flat].reshape(t_n, n), axis=1)
+    # Squared norms choose the vertex (no overflow below |v| ~ 1e150, far beyond any
+    # error here); the norm of the chosen one is taken with hypot.
     sq = vx * vx + vy * vy  # (T, N)
     k = np.argmax(sq, axis=1)
-    top = sq[np.arange(t_n), k]
-    at_start = sx * sx + sy * sy >= top  # the best vertex has crossed ``best`` sources
+    rows = np.arange(t_n)
+    at_start = sx * sx + sy * sy >= sq[rows, k]  # the best vertex has crossed ``best`` sources
     best = np.where(at_start, 0, k + 1)
-    norm = np.sqrt(np.where(at_start, sx * sx + sy * sy, top))
+    norm = np.where(at_start, np.hypot(sx, sy), np.hypot(vx[rows, k], vy[rows, k]))
     if not signs:
         return norm, None
     rank = np.empty_like(order)

@@ -509,13 +509,14 @@ def scan(lam: np.ndarray, t0: float, z0: np.ndarray, t: np.ndarray, incr: np.nda
         else:
             stop = len(t)
         dt = (t[k:stop] - tz).reshape((-1, 1) + extra)
-        # In place in the output block (the same operations as
-        # e^{lambda dt} (z + cumsum(e^{-lambda dt} incr)), without three temporaries).
+        # In place in the output block: e^{lambda dt} (z + cumsum(e^{-lambda dt} incr))
+        # without three temporaries, the operands in the same order (numpy's complex
+        # product is not commutative to the bit).
         blk = out[k:stop]
         np.multiply(np.exp(-lam_b * dt), incr[k:stop], out=blk)
         np.cumsum(blk, axis=0, out=blk)
-        blk += z[None]
-        blk *= np.exp(lam_b * dt)
+        np.add(z[None], blk, out=blk)
+        np.multiply(np.exp(lam_b * dt), blk, out=blk)
         z, tz = out[stop - 1], t[stop - 1]
         k = stop
     return out
