@@ -282,6 +282,8 @@ SCENARIO_BAD: dict[str, str] = {
     ),
     "delta on two-position": '[scheme]\nname = "two-position"\ndelta = 0.5\n',
     "variant on none": '[scheme]\nvariant = "crossing"\n',
+    "phase unknown": '[scheme]\nname = "nulling-two-position"\nphase = "resonant"\n',
+    "phase on two-position": '[scheme]\nname = "two-position"\nphase = "synchronous"\n',
     "reversal on two-position": '[scheme]\nname = "two-position"\nreversal = "60 s"\n',
     "stop 0 s on two-position": '[scheme]\nname = "two-position"\nstop = "-1 s"\n',
     "yaw-swing without amplitude": '[motion]\ntype = "yaw-swing"\n',

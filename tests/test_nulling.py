@@ -19,6 +19,7 @@ from inserr.schemes.nulling import (
     error_integrals,
     heading_period,
     step_dwell,
+    synchronous_dwell,
     yaw_rate_reversals,
 )
 from inserr.schemes.open_loop import Step, TableScheme
@@ -105,6 +106,87 @@ def test_static_base_gives_the_cancelling_mean_zero_cycle():
     assert np.max(np.abs(ci.scale_factor)) < 1e-12  # net table angle zero over the cycle
 
 
+def _turn_midpoints(table):
+    return np.array(
+        [
+            table.t0[k] + 0.5 * table.duration[k]
+            for k in range(len(table))
+            if table.kind[k] == "rotate"
+        ]
+    )
+
+
+@pytest.mark.parametrize("period", [20.0, 60.0, 330.0, 866.0, 1200.0])
+def test_synchronous_turns_are_centred_on_heading_maxima_a_whole_number_of_periods_apart(period):
+    # Once the period is known (three reversals in the history), every turn's middle is
+    # a heading maximum of the swing (heading = A sin(w t): maxima at T/4 + n T), so
+    # consecutive turns are whole periods apart; every stop lasts at least Ts and at
+    # most Ts plus one period; turns are 180 deg in the mean-zero order.
+    motion = YawSwing(pitch=1 * DEG, roll=-2 * DEG, amplitude=3 * DEG, period=period)
+    dur = 12 * 3600.0
+    table = NullingTwoPosition(RATE, TS, phase="synchronous").plan(motion, dur)
+    mid = _turn_midpoints(table)
+    settled = mid[mid > HISTORY_TIME + period]
+    assert len(settled) > 10
+    # The maxima come from yaw-rate reversals sampled at 100 Hz (interpolated zero):
+    # within a small fraction of a sample.
+    phase = (settled - period / 4.0) / period
+    assert np.max(np.abs(phase - np.round(phase))) * period < 1e-3
+    steps = _steps(table)
+    assert all(abs(abs(a) - math.pi) < 1e-12 for a, _ in steps)
+    assert [math.copysign(1, a) for a, _ in steps[:8]] == list(TURNS) * 2
+    dwell = np.array([d for _, d in steps[:-1]])
+    assert np.all(dwell >= TS - 1e-9) and np.all(dwell <= TS + period + 1e-6)
+    trad = build_scheme("two-position", RATE, TS).plan(motion, dur)
+    assert table.motor_starts() / table.end <= trad.motor_starts() / trad.end * (1 + 1e-9)
+
+
+HISTORY_TIME = 8 * TS  # the rule's yaw-rate history (HISTORY_STOPS stop times)
+
+
+def test_synchronous_turns_cancel_the_projection_and_the_tilt_coupled_kicks():
+    # Every two-turn cycle sees the same swing with opposite table signs, so what is
+    # linear in the table's sign cancels cycle by cycle: the bias projection and the
+    # tilt x yaw-rate integral stay within one cycle's worth (no growth), on a swing
+    # (P0 experiment 2's 60 s period at a 330 s + 30 s cycle) where the traditional
+    # cycle resonates and both grow linearly.
+    dur = 12 * 3600.0
+    t_out = np.arange(0.0, dur + 1, 600.0)
+    sync = NullingTwoPosition(RATE, TS, phase="synchronous").plan(P0_EXP2, dur)
+    ints = error_integrals(sync, P0_EXP2, SITE.earth_rate_n, dur, t_out=t_out)
+    tilt = np.abs(ints["mis_xz"][:, 2])
+    half = len(tilt) // 2
+    # Bounded: the second half of the run no larger than the first (a growing sum
+    # would double), and below the golden rule's bound of a few kicks (0.5, above).
+    assert tilt[half:].max() <= 1.05 * tilt[: half + 1].max() and tilt.max() < 0.5
+    proj = np.linalg.norm(ints["bias_x"][:, :2], axis=1)
+    assert proj[half:].max() <= 1.05 * proj[: half + 1].max() and proj.max() < 2 * (TS + 60.0)
+
+
+def test_synchronous_dwell_edge_cases():
+    # No period or no maximum yet: Ts. The wait ends on the first maximum the turn can
+    # be centred on after Ts; an extension too short for it falls back (None).
+    assert synchronous_dwell(TS, 30.0, 1000.0, None, 900.0, None) == TS
+    assert synchronous_dwell(TS, 30.0, 1000.0, 120.0, None, None) == TS
+    # last maximum 990 s, period 120 s: the turn (30 s) must start at or after 1300 s,
+    # so it centres on 990 + 3 * 120 = 1350 s and starts at 1335 s: dwell 335 s.
+    assert synchronous_dwell(TS, 30.0, 1000.0, 120.0, 990.0, None) == pytest.approx(335.0)
+    assert synchronous_dwell(TS, 30.0, 1000.0, 120.0, 990.0, 35.0) == pytest.approx(335.0)
+    assert synchronous_dwell(TS, 30.0, 1000.0, 120.0, 990.0, 34.0) is None
+    # A maximum exactly at the earliest centre is taken (no extra period).
+    assert synchronous_dwell(TS, 30.0, 1000.0, 100.0, 915.0, None) == pytest.approx(TS)
+
+
+def test_synchronous_phase_on_a_static_base_is_the_mean_zero_cycle():
+    motion = Motion(heading=15 * DEG, pitch=1 * DEG, roll=-2 * DEG)
+    a = NullingTwoPosition(RATE, TS, phase="synchronous").plan(motion, 6 * 3600.0)
+    b = NullingTwoPosition(RATE, TS).plan(motion, 6 * 3600.0)
+    np.testing.assert_array_equal(a.t0, b.t0)
+    np.testing.assert_array_equal(a.a0, b.a0)
+    with pytest.raises(InputError, match="scheme.phase"):
+        NullingTwoPosition(RATE, TS, phase="resonant")
+
+
 def test_without_oscillation_every_stop_lasts_ts():
     for motion in (Motion(), Turn(rate=2 * DEG), YawSwing(amplitude=1e-6 * DEG, period=60.0)):
         table = NullingTwoPosition(RATE, TS).plan(motion, 4 * 3600.0)
@@ -160,3 +242,31 @@ def test_reversals_through_a_hold_are_found():
     headings = np.radians([0.0, 10.0, 10.0, 0.0, 0.0, 10.0])
     rev = yaw_rate_reversals(HeadingHistory(times=times, headings=headings), 50.0, 10.0)
     np.testing.assert_allclose(rev, [15.0, 35.0], atol=0.06)
+
+
+@pytest.mark.parametrize("phase", [0, 1])
+def test_design_family_decodes_the_phase_rule_into_a_scenario_table_that_plans_the_same(phase):
+    # The nulling design family's phase variable (0 golden, 1 synchronous) reaches the
+    # scheme, and the [scheme] table it writes (what chosen_scheme.toml holds and
+    # `inserr run` reads) plans the same schedule on the scenario's swing.
+    from pathlib import Path
+
+    from inserr.design.families import build_family
+    from inserr.scenario.schema import load_scenario
+
+    root = Path(__file__).resolve().parents[1]
+    scen = load_scenario(root / "analyses" / "design_p0" / "scenario.toml").with_changes(
+        {"scenario.duration": "6 h"}
+    )
+    fam = build_family(scen, "nulling")
+    assert [v.name for v in fam.variables()][:3] == ["stop", "extension", "phase"]
+    assert fam.start()[2] == 0.0  # the catalogue's golden rule seeds the search
+    dec = fam.decode([320.0, 1500.0, float(phase)])
+    want = ("golden", "synchronous")[phase]
+    assert dec.scheme.phase == want and dec.table["phase"] == want
+    changes = {f"scheme.{k}": v for k, v in dec.table.items()}
+    written = scen.with_changes(changes)
+    a = dec.scheme.plan(scen.motion, scen.duration)
+    b = written.scheme().plan(written.motion, written.duration)
+    np.testing.assert_array_equal(a.t0, b.t0)
+    np.testing.assert_array_equal(a.a0, b.a0)

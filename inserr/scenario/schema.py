@@ -144,6 +144,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "extension": _K(
             "time", None, None, "nulling-two-position: longest lengthening of a stop (absent: stop)"
         ),
+        "phase": _K(
+            "str", None, "golden", "nulling-two-position: golden | synchronous (turns on maxima)"
+        ),
     },
     "output": {
         "step": _K("time", None, "1 s", "output step of the deterministic run"),
@@ -351,6 +354,7 @@ CHOICES: dict[str, tuple[str, ...]] = {
     "output.vertical": ("clamped", "free"),
     "output.engine": ("fast", "exact"),
     "scheme.variant": ("threshold", "crossing"),
+    "scheme.phase": ("golden", "synchronous"),
     "design.family": ("single-axis", "single-axis-golden", "nulling", "flexible", "dual-axis"),
     "design.motions": ("grid", "grid+draws", "random", "scenario", "files"),
     "scheme.start": SCHEME_STARTS,
@@ -571,7 +575,7 @@ def _options_for(name: str, opts: dict) -> dict:
     if name in ("flexible-two-position", "nulling-two-position"):
         keep |= {"delta", "variant", "f"}
     if name == "nulling-two-position":
-        keep |= {"extension"}
+        keep |= {"extension", "phase"}
     if name == "custom":
         keep |= {"steps"}
     return {k: v for k, v in opts.items() if k in keep}
@@ -892,6 +896,7 @@ def scenario_from_dict(
         "variant": sh["variant"],
         "f": sh["decision_rate"],
         "start": sh["start"],
+        "phase": sh["phase"],
     }
     if np.any(sh["mounting"]):
         from inserr.core.rotations import body_to_nav
@@ -973,6 +978,7 @@ _SCHEME_OPTION_KEYS = {
     "reversal": "reversal",
     "delta": "delta",
     "variant": "variant",
+    "phase": "phase",
     "decision_rate": "f",
     "steps": "steps",
 }

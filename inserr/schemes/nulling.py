@@ -43,6 +43,11 @@ is needed. Turns are exactly 180 deg and stops last at least ``Ts``, so the
 motor never starts more often than in the traditional cycle. Without heading
 oscillation (static base, steady turn, swing below ``delta``) every stop lasts
 ``Ts``.
+
+With ``phase="synchronous"`` step 2 is replaced: every stop lasts until the next
+turn can be centred on a heading maximum (:func:`synchronous_dwell`), so consecutive
+turns are whole swing periods apart and everything linear in the table's sign cancels
+over each two-turn cycle instead of staying bounded (``docs/nulling.md`` section 3b).
 """
 
 from __future__ import annotations
@@ -70,6 +75,10 @@ PHASE_FRACTIONS = ((3.0 - math.sqrt(5.0)) / 4.0, (math.sqrt(5.0) - 1.0) / 4.0)
 PHASE_MODULUS = 0.5
 #: Yaw-rate history used for the period estimate, in stop times.
 HISTORY_STOPS = 8
+#: How the rule places its turns (``phase``): ``"golden"`` lengthens each stop so that
+#: the swing phase advances by a golden section (the rule above); ``"synchronous"``
+#: centres every turn on a heading maximum (see :func:`synchronous_dwell`).
+PHASES = ("golden", "synchronous")
 #: Swing tests guessed before they are computed together (see NullingTwoPosition._periods).
 SWING_BATCH = 64
 #: Yaw-rate samples computed either side of a time where the rate may change sign.
@@ -215,6 +224,68 @@ def step_dwell(
     return stop + extra if extra <= extension else None
 
 
+def heading_maxima(motion: Motion, reversals: np.ndarray, f: float) -> np.ndarray:
+    """The yaw-rate reversals that are heading maxima (rate from + to -, clockwise).
+
+    A reversal is classed by the rate one sample after it (what a controller reading
+    its gyros at ``f`` Hz knows then).
+    """
+    r = np.asarray(reversals, dtype=float)
+    if not len(r):
+        return r
+    return r[motion.heading_rate(r + 1.0 / f) < 0.0]
+
+
+def synchronous_dwell(
+    stop: float,
+    turn_time: float,
+    start: float,
+    period: float | None,
+    last_maximum: float | None,
+    extension: float | None,
+) -> float | None:
+    """Dwell that makes the next turn centred on a heading maximum.
+
+    Every turn of the two-position table flips the sign of the constant errors'
+    projection; if every turn happens at the same phase of a periodic heading swing,
+    each stop holds a whole number of swing periods, the two halves of every two-turn
+    cycle see the same swing with opposite table signs, and everything that is linear
+    in the table's sign cancels over the cycle: the bias projection and the kicks of
+    the yaw rate on a tilted vehicle (``docs/nulling.md``). Centring the turn on the
+    maximum (it starts ``turn_time / 2`` before it, where the yaw rate is least) makes
+    the turn itself the same, mirrored, every time. The next maximum is predicted from
+    the last one seen and the period estimate (past data only).
+
+    Parameters
+    ----------
+    stop : float
+        Minimum stop time ``Ts``, s.
+    turn_time : float
+        Duration of the turn that follows, s.
+    start : float
+        Start of the stop, s.
+    period : float or None
+        Heading period estimate, s (None: no oscillation seen).
+    last_maximum : float or None
+        Time of the last heading maximum seen before ``start``, s.
+    extension : float or None
+        Longest lengthening allowed, s (None: any; the wait never exceeds a period).
+
+    Returns
+    -------
+    float or None
+        The dwell (s); ``stop`` without an oscillation or a maximum; None if the
+        lengthening needed exceeds ``extension``.
+    """
+    if period is None or last_maximum is None:
+        return stop
+    earliest = start + stop + 0.5 * turn_time  # the first maximum the turn may centre on
+    n = max(1, math.ceil((earliest - last_maximum) / period - 1e-12))
+    dwell = last_maximum + n * period - 0.5 * turn_time - start
+    extra = dwell - stop
+    return dwell if extension is None or extra <= extension else None
+
+
 @dataclass(frozen=True)
 class NullingTwoPosition:
     """Two-position indexing whose stop time keeps every error integral bounded.
@@ -239,13 +310,18 @@ class NullingTwoPosition:
         Only ``"threshold"`` (accepted so that the flexible rule's scenario
         options apply unchanged).
     extension : float, optional
-        Longest lengthening of a stop, s (default ``Ts``); when more would be needed
-        (heading periods of several ``Ts``) the stop lasts ``Ts``.
+        Longest lengthening of a stop, s (default ``Ts`` for the golden phase rule, no
+        limit for the synchronous one, whose wait is less than a heading period); when
+        more would be needed the stop lasts ``Ts``.
     name : str
         Scheme name used in reports.
     start : str
         ``"stop"`` (default): the run opens with a stop; ``"turn"``: with the first
         turn (+180 deg), each stop then following its turn.
+    phase : str
+        ``"golden"`` (default): stops lengthened to a golden-section phase advance
+        (:func:`step_dwell`); ``"synchronous"``: every turn centred on a heading maximum
+        (:func:`synchronous_dwell`). :data:`PHASES`.
     """
 
     rate: float
@@ -257,8 +333,15 @@ class NullingTwoPosition:
     extension: float | None = None
     name: str = "nulling-two-position"
     start: str = "stop"
+    phase: str = "golden"
 
     def __post_init__(self) -> None:
+        if self.phase not in PHASES:
+            raise InputError(
+                "scheme.phase",
+                f"unknown phase rule {self.phase!r}",
+                f"use one of: {', '.join(PHASES)}",
+            )
         if self.variant != "threshold":
             raise InputError(
                 "scheme.variant",
@@ -296,8 +379,11 @@ class NullingTwoPosition:
             seen[rest] = swing(grid[rest]) >= self.delta
         return seen
 
-    def _periods(self, motion: Motion, duration: float, turn_time: float, ext: float) -> list:
-        """Heading period each stop uses (None: no oscillation seen), in order.
+    def _periods(
+        self, motion: Motion, duration: float, turn_time: float, ext: float | None
+    ) -> tuple[list, list]:
+        """Heading period each stop uses (None: no oscillation seen), in order, and the
+        heading maxima the synchronous phase rule needs (empty for the golden one).
 
         A stop's period is the estimate from the yaw-rate reversals before it
         (:func:`heading_period`, a reversal being known one sample after it
@@ -307,7 +393,9 @@ class NullingTwoPosition:
         (the last one known), the guesses are tested together, and the run restarts
         from the first wrong guess. The outcomes are those of testing one by one.
         """
-        reversals = yaw_rate_reversals(motion, duration, self.f).tolist()
+        rev = yaw_rate_reversals(motion, duration, self.f)
+        reversals = rev.tolist()
+        maxima = heading_maxima(motion, rev, self.f).tolist() if self.phase != "golden" else []
         history = HISTORY_STOPS * self.stop
         starts: list[float] = []
         periods: list[float | None] = []
@@ -326,12 +414,13 @@ class NullingTwoPosition:
                         period = None
                 starts.append(t)
                 periods.append(period)
-                t += self._dwell(period, turn_time, ext)[0]  # the builder's clock, in its order
+                # the builder's clock, in its order
+                t += self._dwell(period, turn_time, ext, t, maxima)[0]
                 if t >= duration:
                     break
                 t += turn_time
             if not guessed:
-                return periods
+                return periods, maxima
             seen = self._swing_seen(motion, [starts[i] for i in guessed]).tolist()
             wrong = next((n for n, s in enumerate(seen) if s != guess), None)
             tested = guessed if wrong is None else guessed[: wrong + 1]
@@ -343,9 +432,18 @@ class NullingTwoPosition:
                 guess = seen[wrong]
             guessed = []
 
-    def _dwell(self, period: float | None, turn_time: float, ext: float) -> tuple[float, bool]:
-        """The stop's dwell (s) and whether it fell back to ``Ts`` (see :func:`step_dwell`)."""
-        dwell = step_dwell(self.stop, turn_time, period, ext)
+    def _dwell(
+        self, period: float | None, turn_time: float, ext: float | None, start: float, maxima: list
+    ) -> tuple[float, bool]:
+        """The dwell (s) of the stop from ``start`` and whether it fell back to ``Ts``
+        (:func:`step_dwell`, or :func:`synchronous_dwell` with the last heading maximum
+        of ``maxima`` known at ``start``, one sample after it)."""
+        if self.phase == "golden":
+            dwell = step_dwell(self.stop, turn_time, period, ext)
+        else:
+            i = bisect.bisect_right(maxima, start - 1.0 / self.f)
+            last = maxima[i - 1] if i else None
+            dwell = synchronous_dwell(self.stop, turn_time, start, period, last, ext)
         return (self.stop, True) if dwell is None else (dwell, False)
 
     def plan(self, motion: Motion, duration: float) -> TableSchedule:
@@ -367,8 +465,11 @@ class NullingTwoPosition:
             ``period_estimates_s`` used (one per stop, s, NaN where none).
         """
         turn_time = math.pi / self.rate
-        ext = self.stop if self.extension is None else self.extension
-        periods = self._periods(motion, duration, turn_time, ext)
+        if self.extension is not None:
+            ext = self.extension
+        else:  # golden: Ts; synchronous: any (it never waits more than a period)
+            ext = self.stop if self.phase == "golden" else None
+        periods, maxima = self._periods(motion, duration, turn_time, ext)
         b = ScheduleBuilder(0.0, 0.0, self.mounting)
         # Turn k follows stop k; opening with a turn shifts the pattern by one.
         first = 0 if self.start == "stop" else 1
@@ -376,7 +477,7 @@ class NullingTwoPosition:
             b.rotate("outer", TURNS[0] * math.pi, self.rate, "turn +180")
         fallbacks = lengthened = 0
         for k, period in enumerate(periods):
-            dwell, fallback = self._dwell(period, turn_time, ext)
+            dwell, fallback = self._dwell(period, turn_time, ext, b.t, maxima)
             fallbacks += fallback
             lengthened += dwell > self.stop
             b.stop(dwell, f"stop {round(math.degrees(b.a)):+d}")
