@@ -123,7 +123,9 @@ DESIGN_FIGURES = {
     "traditional two-position cycle: worst on the grid": (_S, _TP, "grid_worst_nmi"),
     "traditional two-position cycle: motor starts per hour": (_S, _TP, "starts_per_hour"),
     "designed nulling parameters: worst on the grid": (_N, _C, "grid_worst_nmi"),
+    "designed nulling parameters: worst on the whole training set": (_N, _C, "worst_nmi"),
     "designed nulling parameters: worst on the held-out swings": (_N, _C, "held_out_worst_nmi"),
+    "designed nulling parameters: motor starts per hour": (_N, _C, "starts_per_hour"),
     "static base: designed cycle": (_ST, _C, "worst_nmi"),
     "static base: nulling rule": (_ST, _NU, "worst_nmi"),
 }

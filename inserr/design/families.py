@@ -24,7 +24,7 @@ Families (``design.family``)
     stops leave the stop range, or that cannot be balanced, violates the rules.
 ``nulling``
     The nulling two-position rule with its minimum stop, longest lengthening
-    (``design.extension_range``) and rate free.
+    (``design.extension_range``), phase rule (golden or synchronous) and rate free.
 ``flexible``
     P0's flexible rule with its stop, rate, threshold (``design.delta_range``) and
     variant free.
@@ -430,7 +430,8 @@ def _clip(v: float, bounds: tuple[float, float]) -> float:
 
 
 class Nulling(Family):
-    """The nulling two-position rule: minimum stop, longest lengthening, rate."""
+    """The nulling two-position rule: minimum stop, longest lengthening, phase rule
+    (golden or synchronous, :data:`inserr.schemes.nulling.PHASES`), rate."""
 
     name = "nulling"
 
@@ -439,6 +440,7 @@ class Nulling(Family):
         return [
             Variable("stop", *s["stop_range"], "s", 1),
             Variable("extension", *s["extension_range"], "s", 1),
+            Variable("phase", 0, 1),
             *_rate_variable(s),
         ]
 
@@ -447,15 +449,17 @@ class Nulling(Family):
         return [
             s["stop_range"][0],
             _clip(s["stop_range"][0], s["extension_range"]),
+            0.0,  # the catalogue rule's golden phase
             *_start_rate(s),
         ]
 
     def decode(self, x) -> Decoded:
-        from inserr.schemes.nulling import NullingTwoPosition
+        from inserr.schemes.nulling import PHASES, NullingTwoPosition
 
         s = self.settings
         x = list(x)
-        rate_deg = _rate_of(x, 2, s)
+        phase = PHASES[int(round(x[2]))]
+        rate_deg = _rate_of(x, 3, s)
         scheme = NullingTwoPosition(
             rate_deg * DEG,
             x[0],
@@ -463,16 +467,18 @@ class Nulling(Family):
             f=s["decision_rate"],
             delta=s["delta"],
             extension=x[1],
+            phase=phase,
         )
         table = {
             "name": "nulling-two-position",
             "rate": f"{_fmt(rate_deg)} deg/s",
             "stop": f"{_fmt(x[0])} s",
             "extension": f"{_fmt(x[1])} s",
+            "phase": phase,
             "delta": s["delta"],
             "decision_rate": f"{_fmt(s['decision_rate'])} Hz",
         }
-        summary = f"nulling, stop {x[0]:g} s, extension {x[1]:g} s, {rate_deg:g} deg/s"
+        summary = f"nulling ({phase}), stop {x[0]:g} s, extension {x[1]:g} s, {rate_deg:g} deg/s"
         return Decoded(scheme, table, {}, summary)
 
 
