@@ -175,6 +175,42 @@ def verdicts(o: DesignOutcome) -> list[str]:
     return out
 
 
+def meets_issue_17(o: DesignOutcome) -> bool:
+    """Whether a design meets issue 17's done-when: its worst on the grid strictly below
+    every catalogue scheme's, no more motor starts per hour than the traditional cycle,
+    and its held-out worst strictly below every catalogue scheme's."""
+    r = o.results
+    ch, cat = r["chosen"], r["catalogue"]
+    trad = next(c for c in cat if c["label"] == "two-position")
+    held = [c["held_out_worst_nmi"] for c in cat if "held_out_worst_nmi" in c]
+    return (
+        bool(o.settings.grid)
+        and all(ch["grid_worst_nmi"] < c["grid_worst_nmi"] for c in cat)
+        and ch["starts_per_hour"] <= trad["starts_per_hour"]
+        and "held_out_worst_nmi" in ch
+        and all(ch["held_out_worst_nmi"] < h for h in held)
+    )
+
+
+def summary(designs: list[tuple[str, DesignOutcome]]) -> str:
+    """One sentence: which of the designs meets issue 17's done-when (:func:`meets_issue_17`)."""
+    met = [name for name, o in designs if meets_issue_17(o)]
+    missed = [name for name, o in designs if not meets_issue_17(o)]
+    if not met:
+        return (
+            "No design here meets issue 17's done-when (below every catalogue scheme on the "
+            "grid and on the held-out swings, at no more motor starts than the traditional "
+            "cycle); the sentences below say where each falls short."
+        )
+    return (
+        f"Issue 17's done-when (below every catalogue scheme on the grid and on the held-out "
+        f"swings, at no more motor starts than the traditional cycle) is met by the "
+        f"{' and the '.join(met)}"
+        + (f", not by the {' or the '.join(missed)}" if missed else "")
+        + ". The sentences below give each design's figures."
+    )
+
+
 def cycle_lengths(o: DesignOutcome) -> list[tuple[str, float]]:
     """The chosen open-loop schedule's cycle lengths (s): one for a repeated cycle, A and B
     for the golden order (a closed-loop rule has none)."""
@@ -246,6 +282,15 @@ def main(argv: list[str] | None = None) -> int:
 
     rep = build_report(scen, p0, "Designing the indexing schedule for P0's vehicle (issue 17)")
     rep.heading("Verdicts (issue 17)")
+    rep.paragraph(
+        summary(
+            [
+                ("designed open-loop single-axis cycle", p0),
+                ("designed closed-loop single-axis rule (nulling family, next section)", nul),
+            ]
+        )
+    )
+    rep.paragraph("The designed open-loop single-axis cycle:")
     for line in verdicts(p0):
         rep.paragraph(line)
     rows = held_out_budgets(scen, p0)
