@@ -120,6 +120,15 @@ CLI_BAD.update(
     {
         # issue 14's reproductions (flags renamed since: --hours -> --duration ...)
         "issue modes height -7e6": ["modes", "--lat", "45", "--height=-7000000"],
+        "phase bogus": ["drift", *SHORT, "--scheme", "nulling-two-position", "--phase", "bogus"],
+        "phase on two-position": [
+            "drift",
+            *SHORT,
+            "--scheme",
+            "two-position",
+            "--phase",
+            "synchronous",
+        ],
         "issue modes height 1e8": ["modes", "--lat", "45", "--height", "1e8"],
         "issue modes height 1e12": ["modes", "--lat", "45", "--height", "1e12"],
         "issue align seed -1": ["align", "--seed=-1", "--duration", "1min"],

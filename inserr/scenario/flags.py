@@ -148,6 +148,7 @@ FLAGS: dict[str, Flag] = {
     "reversal": _F("scheme.reversal", "s", "reversal period of the continuous scheme (0 = never)"),
     "delta": _F("scheme.delta", None, "stop threshold of the flexible scheme"),
     "variant": _F("scheme.variant", None, "variant of the flexible scheme"),
+    "phase": _F("scheme.phase", None, "phase rule of the nulling scheme"),
     # [output]
     "step": _F("output.step", "s", "output step of the deterministic run"),
     "covariance-step": _F("output.covariance_step", "s", "output step of covariance results"),
@@ -298,7 +299,7 @@ IMU_FLAGS = (
 )
 INITIAL = ("initial-attitude", "initial-velocity", "initial-position")
 MOTION = ("heading-convention", "heading", "pitch", "roll", "turn-rate", "yaw-swing")
-SCHEME = ("scheme", "rate", "stop", "start", "reversal", "delta", "variant")
+SCHEME = ("scheme", "rate", "stop", "start", "reversal", "delta", "variant", "phase")
 OUTPUT = ("step", "covariance-step", "export-step", "substep", "vertical", "engine")
 #: The scenario flags of ``drift`` (and ``compare``, ``validate``, ``sweep``).
 DRIFT = ("duration", *SITE, *IMU_FLAGS, *INITIAL, *MOTION, *SCHEME, *OUTPUT)

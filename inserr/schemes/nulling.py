@@ -224,16 +224,20 @@ def step_dwell(
     return stop + extra if extra <= extension else None
 
 
-def heading_maxima(motion: Motion, reversals: np.ndarray, f: float) -> np.ndarray:
-    """The yaw-rate reversals that are heading maxima (rate from + to -, clockwise).
+def heading_maxima(motion: Motion, reversals: np.ndarray) -> np.ndarray:
+    """The yaw-rate reversals that are heading maxima (clockwise-most headings).
 
-    A reversal is classed by the rate one sample after it (what a controller reading
-    its gyros at ``f`` Hz knows then).
+    Between two consecutive reversals the yaw rate keeps its sign (it may rest at zero),
+    so a reversal is a maximum when the heading rose since the previous one (since
+    t = 0 for the first). The heading there is known when the reversal is: past data
+    only. (The rate just after a reversal is no test: in a hold at a peak, where the
+    reversal is placed mid-hold, it reads zero.)
     """
     r = np.asarray(reversals, dtype=float)
     if not len(r):
         return r
-    return r[motion.heading_rate(r + 1.0 / f) < 0.0]
+    h = motion.heading_at(np.concatenate([[0.0], r]))
+    return r[np.diff(h) > 0.0]
 
 
 def synchronous_dwell(
@@ -279,11 +283,19 @@ def synchronous_dwell(
     """
     if period is None or last_maximum is None:
         return stop
+    if not (math.isfinite(period) and period > 0.0):
+        raise ValueError(f"heading period must be finite and > 0 s, got {period!r}")
+    if not (math.isfinite(last_maximum) and last_maximum <= start):
+        raise ValueError(f"last maximum {last_maximum!r} s is not before the stop ({start} s)")
     earliest = start + stop + 0.5 * turn_time  # the first maximum the turn may centre on
-    n = max(1, math.ceil((earliest - last_maximum) / period - 1e-12))
-    dwell = last_maximum + n * period - 0.5 * turn_time - start
-    extra = dwell - stop
-    return dwell if extension is None or extra <= extension else None
+    # A maximum within 1e-9 periods of the earliest centre is that centre: the times are
+    # sums of many steps (hundreds of thousands of seconds), whose round-off would
+    # otherwise push an exact fit to the next period.
+    n = max(1, math.ceil((earliest - last_maximum) / period - 1e-9))
+    dwell = max(last_maximum + n * period - 0.5 * turn_time - start, stop)
+    if dwell - stop <= 1e-9 * period:
+        dwell = stop
+    return dwell if extension is None or dwell - stop <= extension else None
 
 
 @dataclass(frozen=True)
@@ -395,7 +407,7 @@ class NullingTwoPosition:
         """
         rev = yaw_rate_reversals(motion, duration, self.f)
         reversals = rev.tolist()
-        maxima = heading_maxima(motion, rev, self.f).tolist() if self.phase != "golden" else []
+        maxima = heading_maxima(motion, rev).tolist() if self.phase != "golden" else []
         history = HISTORY_STOPS * self.stop
         starts: list[float] = []
         periods: list[float | None] = []
