@@ -12,6 +12,7 @@ from inserr.core.errors import InputError
 from inserr.schemes.catalogue import build_scheme
 from inserr.schemes.cycle_integrals import cycle_integrals
 from inserr.schemes.nulling import (
+    HISTORY_STOPS,
     PHASE_FRACTIONS,
     PHASE_MODULUS,
     TURNS,
@@ -31,6 +32,7 @@ RATE = 6 * DEG
 TS = 300.0
 SITE = Site(34.246 * DEG, 108.91 * DEG, 380.0)
 # P0 experiment 2: tilted vehicle, yaw rate 6 cos(pi t / 30) deg/s.
+HISTORY_TIME = HISTORY_STOPS * TS  # the rule's yaw-rate history, s
 P0_EXP2 = YawSwing(heading=15 * DEG, pitch=1 * DEG, roll=-2 * DEG, amplitude=6 * DEG, period=60.0)
 
 
@@ -140,9 +142,6 @@ def test_synchronous_turns_are_centred_on_heading_maxima_a_whole_number_of_perio
     assert np.all(dwell >= TS - 1e-9) and np.all(dwell <= TS + period + 1e-6)
     trad = build_scheme("two-position", RATE, TS).plan(motion, dur)
     assert table.motor_starts() / table.end <= trad.motor_starts() / trad.end * (1 + 1e-9)
-
-
-HISTORY_TIME = 8 * TS  # the rule's yaw-rate history (HISTORY_STOPS stop times)
 
 
 def test_synchronous_turns_cancel_the_projection_and_the_tilt_coupled_kicks():

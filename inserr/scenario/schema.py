@@ -35,6 +35,7 @@ from inserr.core.earth import Site
 from inserr.core.errors import InputError
 from inserr.core.imu import ImuErrors, InitialErrors
 from inserr.core.units import DAY, DEG, DEG_PER_HOUR, DEG_PER_SQRT_HOUR, MICRO_G, parse_quantity
+from inserr.schemes.nulling import PHASES
 from inserr.schemes.open_loop import SCHEME_STARTS
 from inserr.schemes.vehicle_motion import (
     HEADING_CONVENTIONS,
@@ -354,7 +355,7 @@ CHOICES: dict[str, tuple[str, ...]] = {
     "output.vertical": ("clamped", "free"),
     "output.engine": ("fast", "exact"),
     "scheme.variant": ("threshold", "crossing"),
-    "scheme.phase": ("golden", "synchronous"),
+    "scheme.phase": PHASES,
     "design.family": ("single-axis", "single-axis-golden", "nulling", "flexible", "dual-axis"),
     "design.motions": ("grid", "grid+draws", "random", "scenario", "files"),
     "scheme.start": SCHEME_STARTS,

@@ -292,8 +292,8 @@ def synchronous_dwell(
     # sums of many steps (hundreds of thousands of seconds), whose round-off would
     # otherwise push an exact fit to the next period.
     n = max(1, math.ceil((earliest - last_maximum) / period - 1e-9))
-    dwell = max(last_maximum + n * period - 0.5 * turn_time - start, stop)
-    if dwell - stop <= 1e-9 * period:
+    dwell = last_maximum + n * period - 0.5 * turn_time - start
+    if dwell - stop <= 1e-9 * period:  # also the round-off just below Ts
         dwell = stop
     return dwell if extension is None or dwell - stop <= extension else None
 
