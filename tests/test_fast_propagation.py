@@ -849,7 +849,7 @@ def test_static_schedule_equals_the_step_engine_on_its_timeline(scheme):
     [("two-position", SWING, 1.0, {"states-grid", "cached-aligned"}),
      ("two-position", SWING, 7.0, {"fine-each", "states-each", "cached-anywhere"}),
      ("nulling-two-position", SWING, 1.0, {"fine-grid", "cached-blocks", "partial-table"}),
-     ("four-position", Motion(), 1.0, {"fine-grid", "rotation-grid"}),
+     ("four-position", Motion(), 1.0, {"fine-grid", "rotation-products"}),
      ("four-position", Motion(), 7.0, {"fine-each", "states-each", "rotation-each"})],
 )  # fmt: skip
 def test_engine_takes_the_faster_paths_where_they_apply(scheme, motion, dt_out, paths):
@@ -861,8 +861,8 @@ def test_engine_takes_the_faster_paths_where_they_apply(scheme, motion, dt_out, 
     # swing reuse the vehicle part per phase, on a step that divides the swing period
     # and the coarse step, is a multiple of the fine step when it can be, and keeps a
     # window's phase within MAX_PHASE; outputs on a uniform grid are one product per
-    # window shape; a static base needs no sampled window at all (stops and turns in
-    # closed form).
+    # run shape (a run: a whole stop, or a whole turn with its harmonics); a static
+    # base needs no sampled window at all (stops and turns in closed form).
     dur = 3600.0
     hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(motion, dur), motion, dur)
     res = analyze_drift(SITE, IMU, INIT, hist, dt_out=dt_out, dt_cov=60.0)
@@ -883,11 +883,13 @@ def test_engine_takes_the_faster_paths_where_they_apply(scheme, motion, dt_out, 
     else:
         assert win["phase_step"] == 0.0 and win["cached"] == win["partial"] == 0
         assert win["direct"] == 0 and win["still"] > 0 and win["rotation"] > 0
-        # One attitude evaluation per turning window and per stop (closed forms; a stop
-        # cut by the coarse grid into several windows holds one attitude).
+        # One attitude evaluation per stop and per turn (closed forms; a stop cut by the
+        # coarse grid into several windows holds one attitude, a turn's windows take its
+        # harmonics from its start).
         stops = int(np.count_nonzero(hist.pieces().still))
-        assert 1 < stops < win["still"]
-        assert res.engine["nodes"] == stops + win["rotation"]
+        turns = len(hist.pieces().still) - stops
+        assert 1 < stops < win["still"] and 1 < turns <= win["rotation"]
+        assert res.engine["nodes"] == stops + turns
     if dt_out == 7.0:  # the step engine reports nothing
         still = Timeline.static(np.eye(3), 600.0)
         assert analyze_drift(SITE, IMU, INIT, still, dt_out=60.0, engine="exact").engine == {}
@@ -1201,3 +1203,72 @@ def test_sampled_windows_in_many_chunks_equal_one_chunk(monkeypatch):
     monkeypatch.setattr(fp, "CHUNK_NODES", 300)
     many = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
     assert _drift_difference(many, one) < 1e-12
+
+
+def test_window_of_is_the_first_window_end_at_or_after_each_output():
+    # Outputs exactly at window ends, within MERGE of them, between them and past the
+    # last one: the index found by placing the ends among the outputs is searchsorted's.
+    rng = np.random.default_rng(11)
+    b = np.cumsum(rng.uniform(0.5, 70.0, 300))
+    t = np.sort(np.concatenate([
+        rng.uniform(0.0, b[-1] + 50.0, 4000), b[::3], b[1::7] + 0.5 * fp.MERGE,
+        b[2::5] + 2.0 * fp.MERGE, [0.0, b[-1] + 10.0],
+    ]))  # fmt: skip
+    want = np.searchsorted(b, t - fp.MERGE, side="left").clip(0, len(b) - 1)
+    assert np.array_equal(fp._window_of(b, t), want)
+    assert np.array_equal(fp._window_of(b, t[:0]), want[:0])
+
+
+def test_interval_sums_add_each_terms_input_into_its_interval():
+    # S[j] = sum over the terms m of interval j of coef[m, r] per[col[m], r, :], with
+    # repeated (interval, column) pairs, unsorted terms and columns never used.
+    rng = np.random.default_rng(12)
+    m, n_r, n_src, n_col = 500, 4, 7, 9
+    j = rng.integers(3, 60, m)
+    col = rng.integers(0, n_col - 2, m)
+    coef = rng.normal(size=(m, n_r)) + 1j * rng.normal(size=(m, n_r))
+    per = rng.normal(size=(n_col, n_r, n_src)) + 1j * rng.normal(size=(n_col, n_r, n_src))
+    jj, sums = fp._interval_sums(j, col, coef, per)
+    assert np.array_equal(jj, np.unique(j))
+    want = np.zeros((len(jj), n_r, n_src), dtype=complex)
+    for k in range(m):
+        want[np.searchsorted(jj, j[k])] += coef[k][:, None] * per[col[k]]
+    assert np.abs(sums - want).max() <= 1e-13 * np.abs(want).max()
+    target = np.zeros((80, n_r, n_src), dtype=complex)
+    fp._add_rows(target, jj, sums)  # not consecutive: a scatter
+    fp._add_rows(target, np.arange(5, 8), np.ones((3, n_r, n_src)))  # consecutive: a slice
+    want_t = np.zeros_like(target)
+    want_t[jj] += sums
+    want_t[5:8] += 1.0
+    assert np.array_equal(target, want_t)
+
+
+@pytest.mark.parametrize("scheme", ["four-position-modified", "flexible-two-position"])
+def test_static_runs_of_whole_stops_and_turns_equal_the_per_output_path(monkeypatch, scheme):
+    # On a static base the 1 s outputs are computed per run (a whole stop, or a whole
+    # turn from its harmonics, however the coarse grid cuts it; neither scheme's stops
+    # are whole seconds, so every run starts a fraction of a second off the grid), and
+    # stops and turns that recur share their features (to 1e-12). Both are checked here
+    # against paths that use neither: the 7 s outputs (each output's state from its own
+    # window) at the common times, and a run with every stop and turn evaluated on its
+    # own. The per-source responses are also checked against the signed run they add
+    # up to (superposition: one path sums sources' inputs, the other the signed input).
+    static = Motion(heading=30 * DEG, pitch=1 * DEG, roll=-2 * DEG)
+    dur = 4 * 3600.0
+    hist = ScheduleHistory(build_scheme(scheme, 6 * DEG, 300.0).plan(static, dur), static, dur)
+    res = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    assert {"fine-grid", "rotation-products"} <= set(res.engine["paths"])
+    sevens = analyze_drift(SITE, IMU, INIT, hist, dt_out=7.0, dt_cov=60.0)
+    assert "fine-each" in sevens.engine["paths"]
+    common = np.isin(res.t, sevens.t)
+    # Round-off of the products and of the phases e^{i k theta0} (angles of ~1e3 rad).
+    assert _relative(res.nav[common], sevens.nav[np.isin(sevens.t, res.t)]) < 1e-11
+    monkeypatch.setattr(fp, "_distinct", lambda c, w: (np.arange(len(c)), np.arange(len(c))))
+    alone = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    assert _relative(res.nav, alone.nav) < 1e-11
+    n = len(res.t_cov)
+    h_a, h_b = res.source_horizontal.reshape(n, -1), alone.source_horizontal.reshape(n, -1)
+    assert _relative(h_a, h_b) < 1e-11
+    at_cov = np.isin(res.t, res.t_cov)
+    signed = res.source_horizontal.sum(axis=1)  # values are signed: the sum is the run
+    assert _relative(signed, res.nav[at_cov][:, 6:8]) < 1e-11

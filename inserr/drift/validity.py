@@ -93,7 +93,10 @@ def check_finite(res, scheme: str) -> None:
     anyway, so that no NaN or infinity ever reaches a report or the JSON.
     """
     arrays = [res.nav, res.attitude, res.source_horizontal, *res.noise_cov.values()]
-    if all(np.all(np.isfinite(a)) for a in arrays):
+    # A NaN or an infinity makes the sum non-finite, so a finite sum proves every entry
+    # finite in one pass without temporaries; a non-finite sum (an entry, or an overflow
+    # of the sum itself) is settled entry by entry.
+    if all(np.isfinite(np.sum(a)) or np.all(np.isfinite(a)) for a in arrays):
         return
     raise InputError(
         "scenario",
@@ -118,10 +121,14 @@ def linear_validity_warnings(res, site: Site) -> list[str]:
         the run stays inside all three.
     """
     out = []
-    att = np.abs(res.attitude) if res.attitude.size else np.zeros((1, 3))
+    att = res.attitude if res.attitude.size else np.zeros((1, 3))
+
+    def largest(a: np.ndarray) -> float:  # max |a| without a copy of |a|
+        return max(float(a.max()), -float(a.min()))
+
     for what, value, limit in (
-        ("tilt", float(att[:, :2].max()), TILT_LIMIT),
-        ("heading", float(att[:, 2].max()), HEADING_LIMIT),
+        ("tilt", largest(att[:, :2]), TILT_LIMIT),
+        ("heading", largest(att[:, 2]), HEADING_LIMIT),
     ):
         if value > limit:
             out.append(

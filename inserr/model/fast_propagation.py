@@ -51,6 +51,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import sparse
 from threadpoolctl import ThreadpoolController
 
 from inserr.core.rotations import skew
@@ -97,6 +98,10 @@ def phi1(z: np.ndarray) -> np.ndarray:
     out = np.expm1(zz) / zz
     out[zero] = 1.0
     return out
+
+
+#: Nine float64 values as one item (a navigation vector), for row scatters.
+_ROW9 = np.dtype((np.void, 72))
 
 
 class _OffsetTable:
@@ -614,7 +619,8 @@ def _grid_step(t: np.ndarray) -> float | None:
         return None
     h = float(t[1] - t[0])
     inner = t[:-1] if len(t) > 2 else t
-    return h if np.allclose(np.diff(inner), h, rtol=0, atol=1e-9) else None
+    # |diff - h| <= 1e-9 everywhere (False for NaN), without allclose's temporaries.
+    return h if float(np.max(np.abs(np.diff(inner) - h))) <= 1e-9 else None
 
 
 def constant_error_response(
@@ -655,8 +661,9 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     t_coarse = np.asarray(t_coarse, dtype=float)
     pieces = history.pieces()
     fastest = float(np.max(np.abs(lam)))
-    step = phase_step(pieces, t_coarse, _grid_step(t_fine), fastest)
-    lift = _lifting(history, t_fine, t_coarse)
+    h, hc = _grid_step(t_fine), _grid_step(t_coarse)
+    step = phase_step(pieces, t_coarse, h, fastest)
+    lift = _lifting(history, t_fine, t_coarse, (h, hc))
     if lift is None:
         win = make_windows(pieces, t_coarse, fastest, step)
         base_coarse = t_coarse
@@ -687,7 +694,6 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     # Fine outputs in blocks (a 720 h run at 1 s has 2.6 million of them), and the
     # per-source responses: independent pieces of work, on up to engine_threads().
     fine = np.empty((len(t_fine), 9))
-    h = _grid_step(t_fine)
 
     def per_source() -> np.ndarray:
         # Modal inputs per coarse interval, then the scan over coarse intervals.
@@ -737,6 +743,19 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     return ConstantErrorResponse(
         t_fine, fine, t_coarse, coarse, counts, run.nodes, frozenset(run.paths)
     )
+
+
+def _window_of(b: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Index of the window holding each output time: the first window end ``b`` at or
+    after ``t - MERGE`` (the last window past the end), for increasing ``t``.
+
+    Equal to ``np.searchsorted(b, t - MERGE, side="left").clip(0, len(b) - 1)``, found
+    by placing the few window ends among the many outputs instead.
+    """
+    s = t - MERGE
+    ends = np.searchsorted(s, b, side="right")  # outputs at or before each window end
+    counts = np.diff(np.concatenate([[0], ends, [len(s)]]))
+    return np.repeat(np.arange(len(b) + 1), counts).clip(0, len(b) - 1)
 
 
 def _blocks(n: int) -> list[tuple[int, int]]:
@@ -837,7 +856,9 @@ def _lifted_coarse(lam: np.ndarray, t: np.ndarray, inputs: np.ndarray, lift, out
         out[lo:] = e[: len(t) - lo] * z[whole][None] + p[: len(t) - lo]
 
 
-def _lifting(history, t_fine: np.ndarray, t_coarse: np.ndarray) -> tuple[float, float] | None:
+def _lifting(
+    history, t_fine: np.ndarray, t_coarse: np.ndarray, steps: tuple | None = None
+) -> tuple[float, float] | None:
     """``(t0, P)`` if the history repeats with period P after t0, on both output grids.
 
     Lifting needs at least two whole periods, and every output time and window
@@ -851,7 +872,8 @@ def _lifting(history, t_fine: np.ndarray, t_coarse: np.ndarray) -> tuple[float, 
         return None
     t0, p = found
     end = float(t_coarse[-1])
-    hc, hf = _grid_step(t_coarse), _grid_step(t_fine)
+    # steps: the grids' (fine, coarse) steps when the caller has them already.
+    hf, hc = steps if steps is not None else (_grid_step(t_fine), _grid_step(t_coarse))
     if hc is None or hf is None:
         return None
     for h in (hc, hf):
@@ -986,29 +1008,39 @@ class _Run:
 
     # --- still windows: constant attitude, closed forms ---------------------------------
     def still_windows(self) -> None:
+        """Windows of constant attitude: closed forms.
+
+        A still piece holds one attitude: its features and every source's input are
+        found once per piece (at the middle of its first window), and once for all the
+        stops that hold the same attitude (to 1e-12; a cycle's positions recur), then
+        shared by the windows the coarse grid cuts the stops into. The windows' weights
+        are summed into their coarse intervals by one sparse product per mode.
+        """
         win = self.win
         idx = np.flatnonzero(win.kind == STILL)
         if not len(idx):
             return
         length = win.b[idx] - win.a[idx]
-        # A still piece holds one attitude: its features (and inputs) once per piece, at
-        # the middle of its first window, for all its windows (a stop cut by the coarse
-        # grid into many).
         _, first, of_piece = np.unique(win.piece[idx], return_index=True, return_inverse=True)
         sel = idx[first]
-        feats = self._imu_features(0.5 * (win.a[sel] + win.b[sel]), win.piece[sel])
+        c, w_ns = self.history.evaluate(0.5 * (win.a[sel] + win.b[sel]), win.piece[sel])
+        self._count(len(sel))
+        rep, of_key = _distinct(c, w_ns)
+        c, w_ns = c[rep], w_ns[rep]
+        w_is = np.einsum("nji,nj->ni", c, self.earth + w_ns)  # C^T (Omega + w): IMU frame
+        f_s = np.einsum("nji,j->ni", c, self.f_n)  # C^T f: IMU frame
+        feats = _features(c, w_is, f_s)  # (G, 63): one row per distinct attitude
+        held = of_key.reshape(-1)[of_piece.reshape(-1)]  # distinct attitude of each window
         wt = length[:, None] * phi1(self.lam[None, :] * length[:, None])  # int_0^L e^{lambda s}
-        u = _apply_form(feats, self.a_sig)[of_piece]
+        u = _apply_form(feats, self.a_sig)[held]
         self.u_still[idx] = u
         self.incr[idx] = wt * u
-        w = wt * self._to_coarse(win.b[idx], win.coarse[idx])
-        # Real features: one real product per part of the per-source form, then the
-        # window weights (per mode) and the sum per coarse interval.
+        w = wt * self._to_coarse(win.b[idx], win.coarse[idx])  # (W, R)
+        # Per-source inputs: sum over the windows of a coarse interval of w[w, r] times
+        # the input of its attitude.
         form = self.source_form  # (R, 63, N)
-        flat = np.moveaxis(form, 1, 0).reshape(N_FEATURES, -1)  # (63, R N)
-        per = (feats @ flat.real + 1j * (feats @ flat.imag)).reshape(len(sel), *form.shape[::2])
-        jj, sums = _group_sum(win.coarse[idx], per[of_piece] * w[:, :, None])
-        self.inputs[jj] += sums
+        per = np.stack([feats @ f.real + 1j * (feats @ f.imag) for f in form], axis=1)
+        _add_rows(self.inputs, *_interval_sums(win.coarse[idx], held, w, per))
 
     # --- rotation windows: constant angular velocity, closed forms ---------------------
     def rotation_windows(self) -> None:
@@ -1019,47 +1051,66 @@ class _Run:
         matrices; ``C^T w`` is constant about the turn axis). Five equally spaced turn
         angles give the ``F_k`` exactly (a discrete Fourier transform), and
         ``int_0^L e^{lambda (L - tau)} e^{i nu tau} dtau = e^{lambda L} L phi1((i nu - lambda) L)``.
+
+        The ``F_k`` are found once per turn, at its start: a window that begins
+        ``theta0 = rho (a_w - a_turn)`` into the turn has ``F_k e^{i k theta0}``. Turns
+        with the same start attitude and angular velocity (to 1e-12; a static base
+        repeats its cycle's turns) share them, and every source's input per harmonic
+        (the sources' linear forms applied to ``F_k``) too, so a window costs its five
+        weights per mode, summed into its coarse interval by one sparse product per mode.
         """
         win, lam = self.win, self.lam
         idx = np.flatnonzero(win.kind == ROTATION)
         if not len(idx):
             return
-        c_a, w = self.history.evaluate(win.a[idx], win.piece[idx])
-        self._count(len(idx))
+        piece = win.piece[idx]
+        head = np.flatnonzero(np.concatenate([[True], piece[1:] != piece[:-1]]))
+        of_turn = np.repeat(np.arange(len(head)), np.diff(np.append(head, len(idx))))
+        a_turn = win.a[idx][head]
+        c_a, w = self.history.evaluate(a_turn, piece[head])
+        self._count(len(head))
+        rep, of_key = _distinct(c_a, w)
+        c_a, w = c_a[rep], w[rep]
+        turn = of_key.reshape(-1)[of_turn]  # distinct turn of each window
         rho = np.linalg.norm(w, axis=1)
         axis = w / rho[:, None]
         ks = np.arange(-2, 3)
         theta = 2.0 * np.pi * np.arange(ROTATION_SAMPLES) / ROTATION_SAMPLES
-        kx = skew(axis)  # (W, 3, 3)
+        kx = skew(axis)  # (U, 3, 3)
         rot = (
             np.eye(3)[None, None]
             + np.sin(theta)[None, :, None, None] * kx[:, None]
             + (1.0 - np.cos(theta))[None, :, None, None] * (kx @ kx)[:, None]
-        )  # (W, 5, 3, 3): the attitude after turning by theta_j
+        )  # (U, 5, 3, 3): the attitude after turning by theta_j
         c = rot @ c_a[:, None]
         w_is = np.einsum("wjba,wb->wja", c, self.earth + w)
         f_s = np.einsum("wjba,b->wja", c, self.f_n)
         feats = _features(c.reshape(-1, 3, 3), w_is.reshape(-1, 3), f_s.reshape(-1, 3))
-        feats = feats.reshape(len(idx), ROTATION_SAMPLES, N_FEATURES)
+        feats = feats.reshape(len(rep), ROTATION_SAMPLES, N_FEATURES)
         # F_k = (1/5) sum_j F(theta_j) e^{-i k theta_j}, k = -2..2
         dft = np.exp(-1j * ks[:, None] * theta[None, :]) / ROTATION_SAMPLES  # (5 k, 5 j)
-        fk = np.matmul(dft.real, feats) + 1j * np.matmul(dft.imag, feats)  # (W, 5, 63)
-        nu = ks[None, :] * rho[:, None]  # (W, 5) rad/s
+        fk = np.matmul(dft.real, feats) + 1j * np.matmul(dft.imag, feats)  # (U, 5, 63)
+        # Each window's harmonics from its turn's: the phase e^{i k theta0}.
+        r_w = rho[turn]
+        phase = np.exp(1j * ks[None, :] * (r_w * (win.a[idx] - a_turn[of_turn]))[:, None])
+        uk = (fk @ self.a_sig.T)[turn] * phase[:, :, None]  # (W, 5, R): signed input
+        nu = ks[None, :] * r_w[:, None]  # (W, 5) rad/s
         length = win.b[idx] - win.a[idx]
         # int_0^L e^{lambda (L - tau)} e^{i nu tau} dtau, per window, harmonic, mode.
         zl = (1j * nu[:, :, None] - lam[None, None, :]) * length[:, None, None]
         wt = (np.exp(lam[None, :] * length[:, None]) * length[:, None])[:, None, :] * phi1(zl)
-        uk = fk @ self.a_sig.T  # (W, 5, R): signed input per harmonic
         self.incr[idx] = (uk * wt).sum(axis=1)
+        # Per-source inputs: sum over the windows of a coarse interval of
+        # sum_k wt to_c e^{i k theta0} [w, k, r] x (F_k of the turn @ form_r): a sparse
+        # (intervals x turns 5) matrix per mode times the turns' harmonic inputs.
         j = win.coarse[idx]
         to_c = self._to_coarse(win.b[idx], j)  # (W, R)
-        # y[w, r, f] = sum_k wt to_c [w, k, r] fk[w, k, f]: five broadcast products.
-        wtc = wt * to_c[:, None, :]
-        y = wtc[:, 0, :, None] * fk[:, 0, None, :]
-        for k in range(1, ROTATION_SAMPLES):
-            y += wtc[:, k, :, None] * fk[:, k, None, :]
-        jj, sums = _group_sum(j, y)
-        self._add_features(jj, sums)
+        coef = wt * to_c[:, None, :] * phase[:, :, None]  # (W, 5, R)
+        flat_fk = fk.reshape(-1, N_FEATURES)
+        per = np.stack([flat_fk @ f for f in self.source_form], axis=1)  # (U 5, R, N)
+        cols = (turn[:, None] * ROTATION_SAMPLES + np.arange(ROTATION_SAMPLES)[None, :]).ravel()
+        sums = _interval_sums(np.repeat(j, ROTATION_SAMPLES), cols, coef.reshape(-1, len(lam)), per)
+        _add_rows(self.inputs, *sums)
         self.rotation_uk = np.zeros((len(win.a), ROTATION_SAMPLES, len(lam)), dtype=complex)
         self.rotation_uk[idx] = uk
         self.rotation_nu = np.zeros((len(win.a), ROTATION_SAMPLES))
@@ -1314,6 +1365,7 @@ class _Run:
     # --- fine output times --------------------------------------------------------------
     def prepare_fine(self, dt_fine: float | None) -> None:
         """Make the tables the fine-output blocks share (before they run at once)."""
+        self._run_lead()
         if hasattr(self, "cached_template") and fine_aligned(self.step, dt_fine):
             self._cached_nav_table(dt_fine)
 
@@ -1328,7 +1380,12 @@ class _Run:
             self.paths.add("fine-each")
             return self.modes.to_nav(self.fine_states(t, dt_fine))
         full = self.full if self.full is not None else self.win
-        wf = np.searchsorted(full.b, t - MERGE, side="left").clip(0, len(full.b) - 1)
+        wf = _window_of(full.b, t)
+        if self.full is None:
+            # The windows of one stop or turn (the coarse grid cuts a piece into several)
+            # form one run from the first one's start: a piece costs one row of the
+            # products of _nav_on_grid, not one per window.
+            wf = self._run_lead()[wf]
         w = self.src[wf] if self.src is not None else wf
         dt = t - full.a[wf]
         table = _OffsetTable(self.lam, dt, dt_fine, wf)
@@ -1337,6 +1394,25 @@ class _Run:
             return self.modes.to_nav(self.fine_states(t, dt_fine))
         self.paths.add("fine-grid")
         return self._nav_on_grid(table, w, wf, dt, dt_fine)
+
+    def _run_lead(self) -> np.ndarray:
+        """Per window: the first window of its chain of still windows, or of turn
+        windows, of one piece (itself for every other window).
+
+        A stop's input is one constant and a turn's one set of harmonics from the
+        turn's first window on (:meth:`rotation_windows`), so outputs anywhere in the
+        piece follow from the first window's start state and data.
+        """
+        if "lead" not in self._memo:
+            win = self.win
+            closed = (win.kind == STILL) | (win.kind == ROTATION)
+            joined = np.zeros(len(closed), dtype=bool)
+            joined[1:] = (
+                closed[1:] & (win.kind[1:] == win.kind[:-1]) & (win.piece[1:] == win.piece[:-1])
+            )
+            idx = np.arange(len(closed))
+            self._memo["lead"] = np.maximum.accumulate(np.where(joined, 0, idx))
+        return self._memo["lead"]
 
     def _nav_on_grid(self, table, w, wf, dt, dt_fine) -> np.ndarray:
         """Navigation errors at outputs ``dt = delta + k h`` into their windows.
@@ -1369,9 +1445,32 @@ class _Run:
             # windows' tabulated block at the output's offset (alpha + dt) / h from c.
             p_run, shift, _ = partial
             x_run[p_run] -= ed[p_run] * shift
-        coef = np.concatenate([x_run, u_run], axis=1).view(float)  # (runs, 4R): re, im pairs
+        # Turns at a constant rate (rotation_windows): with mu_h = i nu_h - lambda the
+        # in-window integral is J(delta + k h) = sum_h u_h (delta phi1(mu_h delta) +
+        # e^{mu_h delta} T_h(k)), T_h(k) = k h phi1(mu_h k h): a part constant over the
+        # run, which joins X, and five parts on a table per turn rate, so a turn's
+        # outputs are one product per (rate, k0, c) shape, as a stop's are.
+        rot_run = kind_run == ROTATION
+        rot_cls = np.full(len(first), -1)
+        rot_coef = np.zeros((len(first), ROTATION_SAMPLES * n_r), dtype=complex)
+        rates = np.zeros(0)
+        if np.any(rot_run):
+            self.paths.add("rotation-products")
+            wr = w_run[rot_run]
+            uk, nu = self.rotation_uk[wr], self.rotation_nu[wr]  # (G, 5, R), (G, 5)
+            d = table.delta[rot_run][:, None, None]
+            mu = 1j * nu[:, :, None] - lam[None, None, :]
+            x_run[rot_run] += ed[rot_run] * (uk * (d * phi1(mu * d))).sum(axis=1)
+            bh = ed[rot_run][:, None, :] * uk * np.exp(mu * d)
+            rot_coef[rot_run] = bh.reshape(len(wr), -1)
+            # nu[:, -1] = 2 rho: the turn rate, to 1e-12 rad/s.
+            rates, cls = np.unique(np.rint(nu[:, -1] * 1e12), return_inverse=True)
+            rot_cls[rot_run] = cls.reshape(-1)
+        coef = np.concatenate([x_run, u_run, rot_coef], axis=1).view(float)  # re, im pairs
         vw = (modes.out * modes.weight[None, :]).T  # (R, 9): x = Re(sum_r z_r vw[r])
         out = np.empty((len(k), 9))
+        rows_of = _ROW9  # each output's nine values as one item: a faster scatter below
+        out_rows = out.view(rows_of).reshape(-1)
         # Cached windows on the output grid start on it (delta = 0, k0 = 1) and hold one
         # whole phase step: their in-window part is a block of navigation errors per
         # (class, phase, table), added to the product of their shape (one zero block
@@ -1397,26 +1496,40 @@ class _Run:
                 self.cached_class[wc] * m + self.win.phase[wc]
             ) * n_t + self.cached_table[wc]
             todo &= ~whole[run]
+        todo &= ~rot_run[run]
         k0 = k[first]
         span = int(counts.max()) + 1
-        shapes, shape_of = np.unique(k0 * span + counts, return_inverse=True)
+        kspan = int(k0.max()) + 1
+        shape_key = ((rot_cls + 1) * kspan + k0) * span + counts
+        shapes, shape_of = np.unique(shape_key, return_inverse=True)
         shape_of = shape_of.reshape(-1)
         order = np.argsort(shape_of, kind="stable")
         bounds = np.searchsorted(shape_of[order], np.arange(len(shapes) + 1))
+        harm = np.arange(-2, 3)
         for g, key in enumerate(shapes):
-            kk, c = divmod(int(key), span)
+            cls_kk, c = divmod(int(key), span)
+            cls, kk = divmod(cls_kk, kspan)
+            cls -= 1
             runs = order[bounds[g] : bounds[g + 1]]
             ks = np.arange(kk, kk + c)
-            mats = np.empty((2 * n_r, 2, c, 9))  # rows: (mode, X | U) x (re, im)
-            for part, tab in ((0, table._exp), (1, table._phi)):
-                a = tab[ks].T[:, :, None] * vw[:, None, :]  # (R, c, 9): e_r(k) vw[r]
+            tabs = [table._exp[ks], table._phi[ks]]  # (c, R) each
+            if cls >= 0:
+                # e^{lambda k h} T_h(k) of this turn rate, harmonics -2..2.
+                grid = (ks * dt_fine)[:, None, None]
+                mu = 1j * (rates[cls] * 1e-12 / 2.0) * harm[None, :, None] - lam[None, None, :]
+                th = table._exp[ks][:, None, :] * (grid * phi1(mu * grid))  # (c, 5, R)
+                tabs += [th[:, h] for h in range(ROTATION_SAMPLES)]
+            parts = len(tabs)
+            mats = np.empty((parts * n_r, 2, c, 9))  # rows: (part, mode) x (re, im)
+            for part, tab in enumerate(tabs):
+                a = tab.T[:, :, None] * vw[:, None, :]  # (R, c, 9): e_r(k) vw[r]
                 mats[part * n_r : (part + 1) * n_r, 0] = a.real
                 mats[part * n_r : (part + 1) * n_r, 1] = -a.imag
-            vals = coef[runs] @ mats.reshape(4 * n_r, c * 9)  # (G, c 9)
+            vals = coef[runs, : 2 * parts * n_r] @ mats.reshape(2 * parts * n_r, c * 9)
             if cached_block is not None and kk == 1 and c == cached_block.shape[1] // 9:
                 vals += cached_block[cached_key[runs]]
             pts = (first[runs][:, None] + np.arange(c)[None, :]).ravel()
-            out[pts] = vals.reshape(-1, 9)
+            out_rows[pts] = np.ascontiguousarray(vals).view(rows_of).reshape(-1)
         if partial is not None:
             p_run, _, rows = partial
             pts = np.flatnonzero(np.isin(run, np.flatnonzero(p_run)))
@@ -1762,6 +1875,43 @@ class _Nodes:
 def _apply_form(feats: np.ndarray, form: np.ndarray) -> np.ndarray:
     """``feats @ form.T`` for real features and a complex form (two real products)."""
     return feats @ form.real.T + 1j * (feats @ form.imag.T)
+
+
+def _distinct(c: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Attitudes ``c`` (K, 3, 3) with angular velocities ``w`` (K, 3) rad/s that are the
+    same to 1e-12 (and 1e-15 rad/s): the index of one of each, and of each one's."""
+    key = np.rint(np.concatenate([c.reshape(-1, 9), w * 1e3], axis=1) * 1e12) + 0.0  # no -0
+    rows = np.ascontiguousarray(key).view(np.dtype((np.void, key.shape[1] * 8))).reshape(-1)
+    _, rep, of = np.unique(rows, return_index=True, return_inverse=True)
+    return rep, of.reshape(-1)
+
+
+def _interval_sums(
+    j: np.ndarray, col: np.ndarray, coef: np.ndarray, per: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Sums ``S[j] = sum_m coef[m, r] per[col[m], r, :]`` over the terms m of each coarse
+    interval j: ``(intervals, S)``, S (len(intervals), R, N).
+
+    One sparse product for all modes: rows (interval, mode), columns (col, mode), so
+    the few distinct inputs ``per`` (stops or turns that recur) are never copied per term.
+    """
+    jj, row = np.unique(j, return_inverse=True)
+    n_r = per.shape[1]
+    modes = np.arange(n_r)
+    rows = (row.reshape(-1, 1) * n_r + modes).ravel()
+    cols = (np.asarray(col).reshape(-1, 1) * n_r + modes).ravel()
+    mat = sparse.csr_matrix((coef.ravel(), (rows, cols)), shape=(len(jj) * n_r, per.shape[0] * n_r))
+    sums = mat @ per.reshape(per.shape[0] * n_r, -1)
+    return jj, sums.reshape(len(jj), n_r, -1)
+
+
+def _add_rows(target: np.ndarray, rows: np.ndarray, values: np.ndarray) -> None:
+    """``target[rows] += values`` for distinct increasing ``rows``; a slice (no gather or
+    scatter) when they are consecutive."""
+    if len(rows) and rows[-1] - rows[0] == len(rows) - 1:
+        target[rows[0] : rows[-1] + 1] += values
+    else:
+        target[rows] += values
 
 
 def _group_sum(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
