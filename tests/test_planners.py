@@ -417,3 +417,41 @@ def test_fallback_best_sample_in_closed_form_equals_every_sample(case):
         looked.append(fast.n_short if found is None else len(found[0]))
     # The bounds did their job: most turns were looked at in a few stretches only.
     assert np.median(looked) < fast.n_short / 4
+
+
+@pytest.mark.parametrize("mounting", [None, MOUNT], ids=["aligned", "off-axis"])
+def test_static_turns_from_a_recurring_angle_stop_where_the_search_stops(mounting):
+    """On a static base a turn from an angle seen before is answered from its kept,
+    sorted samples (two binary searches); it must stop where the bounded search stops.
+
+    Start angles from a small set (as a static run's are), both directions and tests,
+    offsets ``c`` spread over the band's reach and placed right at samples' band edges
+    (``|main + c|`` within an ulp or so of delta), every sign condition.
+    """
+    from inserr.schemes.closed_loop import _TurnSearch
+
+    motion = Motion(**TILT)
+    scheme = build_scheme("flexible-two-position", RATE, TS, mounting=mounting)
+    kept = _TurnSearch(scheme, motion, 6 * 3600.0)
+    searched = _TurnSearch(scheme, motion, 6 * 3600.0)
+    searched.heading = None  # the bounded search every time
+    searched.static_phasor = {}
+    rng = np.random.default_rng(21)
+    angles = [0.0, 0.00942477796076938, 3.0997047516, -2.5, 6.2412974, 40.1]
+    answered = 0
+    for _ in range(600):
+        a0 = float(rng.choice(angles))
+        direction = float(rng.choice([1.0, -1.0]))
+        which = int(rng.integers(2))
+        s_other = float(rng.choice([1.0, -1.0, 0.0]))
+        main, _ = kept.values(0.0, a0, direction, which, kept.j)
+        edge = float(main[rng.integers(len(main))])
+        c = float(rng.choice([rng.uniform(-1.05, 1.05), -edge + 0.01, -edge - 0.01,
+                              np.nextafter(-edge + 0.01, 0.0), -edge]))  # fmt: skip
+        t0 = float(rng.uniform(0.0, 6 * 3600.0))
+        got = kept.first_pass(t0, a0, direction, which, c, s_other)
+        assert got == searched.first_pass(t0, a0, direction, which, c, s_other)
+        answered += (a0, direction, which) in kept._recurring and s_other in kept._recurring[
+            (a0, direction, which)
+        ]
+    assert answered > 400  # most were answered from the kept samples

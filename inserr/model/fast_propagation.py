@@ -514,13 +514,13 @@ def scan(lam: np.ndarray, t0: float, z0: np.ndarray, t: np.ndarray, incr: np.nda
         else:
             stop = len(t)
         dt = (t[k:stop] - tz).reshape((-1, 1) + extra)
-        # In place in the output block: e^{lambda dt} (z + cumsum(e^{-lambda dt} incr))
-        # without three temporaries, the operands in the same order (numpy's complex
-        # product is not commutative to the bit).
+        # In place in the output block: e^{lambda dt} cumsum(e^{-lambda dt} incr), with
+        # z added to the first term (the cumulative sum carries it to every row), without
+        # temporaries: three passes over the block.
         blk = out[k:stop]
         np.multiply(np.exp(-lam_b * dt), incr[k:stop], out=blk)
+        blk[0] += z
         np.cumsum(blk, axis=0, out=blk)
-        np.add(z[None], blk, out=blk)
         np.multiply(np.exp(lam_b * dt), blk, out=blk)
         z, tz = out[stop - 1], t[stop - 1]
         k = stop

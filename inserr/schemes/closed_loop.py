@@ -290,6 +290,9 @@ def _passes(expr, other, s_other, variant: str, delta: float) -> np.ndarray:
     return hit
 
 
+#: :meth:`_TurnSearch._recurring_turn` could not answer: search the turn.
+_SEARCH = object()
+
 #: Samples of a turn computed together at most (see _TurnSearch._first_in).
 _CHUNK = 128
 
@@ -326,6 +329,11 @@ class _TurnSearch:
         self.rule = rule
         self.motion = motion
         self.geo = OuterAxisHeading(motion.tilt, rule.mounting)
+        # A vehicle that never turns: its heading, so that no sample asks the motion for
+        # it (the same value heading_at gives at every time; the same sums follow).
+        self.heading = float(motion.heading_at(np.zeros(1))[0]) if motion.is_static else None
+        self.static_phasor: dict = {}  # per direction, on a static base (see first_pass)
+        self._recurring: dict = {}  # turns from one start angle (see _recurring_turn)
         w, f = rule.rate, rule.f
         self.per_turn = int(math.ceil(2 * math.pi / w * f))
         self.j = j = np.arange(1, self.per_turn + 1)
@@ -379,6 +387,10 @@ class _TurnSearch:
             self.reach = lip * gap + 2.0 * slack
         # The kept term's phase from the turn at the coarse samples, both directions.
         self.turned = {d: self.sense * d * w * self.coarse_dt for d in (1.0, -1.0)}
+        if self.heading is not None:
+            # exp(i (H + turned)) does not depend on the turn's start time: once.
+            full = np.full(len(self.coarse_dt), self.heading)
+            self.static_phasor = {d: np.exp(1j * (full + v)) for d, v in self.turned.items()}
         # The fallback's look at the turn short of a revolution: samples a second apart
         # (ending at the last short one) and, per stretch between them, how far cos psi
         # and sin psi can leave the chord (with the curvature bound) or move along it
@@ -396,9 +408,11 @@ class _TurnSearch:
         """``(main, other)`` at samples ``j`` of a turn from ``(t0, a0)`` (sampled rule)."""
         # Consecutive samples (the usual case) as a slice: a view, not a copy.
         k = slice(j[0] - 1, j[-1]) if j[-1] - j[0] == len(j) - 1 else j - 1
-        t = t0 + self.dt[k]
         a = a0 + self.da[direction][k]
-        h = self.motion.heading_at(t) + self.geo.offset(a)
+        if self.heading is not None:
+            h = self.heading + self.geo.offset(a)
+        else:
+            h = self.motion.heading_at(t0 + self.dt[k]) + self.geo.offset(a)
         return (np.cos(h), np.sin(h)) if which == 0 else (np.sin(h), np.cos(h))
 
     def _near(self, expr: np.ndarray, toward: np.ndarray | None, more: float) -> np.ndarray:
@@ -431,12 +445,21 @@ class _TurnSearch:
         ``c`` is the stop-sum term ``S / (f Ts)`` added to ``main``; ``s_other`` the sign
         ``other`` must not have (0: no sign condition).
         """
+        if self.heading is not None and self.rule.variant == "threshold":
+            found = self._recurring_turn(a0, direction, which, c, s_other)
+            if found is not _SEARCH:
+                return found
         if self.lipschitz is None:
             return self._first_in(t0, a0, direction, which, c, s_other, self.j)
         jc = self.coarse
         # exp(i psi) at the coarse samples, roughly: exp(i H) times the kept term.
-        phase = self.motion.heading_at(t0 + self.coarse_dt) + self.turned[direction]
-        psi = np.exp(1j * phase) * (self.coef * cmath.exp(1j * self.sense * a0))
+        if direction in self.static_phasor:
+            turned = self.static_phasor[direction]
+        else:
+            turned = np.exp(
+                1j * (self.motion.heading_at(t0 + self.coarse_dt) + self.turned[direction])
+            )
+        psi = turned * (self.coef * cmath.exp(1j * self.sense * a0))
         main, other = (psi.real, psi.imag) if which == 0 else (psi.imag, psi.real)
         # The table angle's round-off grows with it: 1e-12 of it on top.
         more = 1e-12 * abs(a0)
@@ -460,6 +483,43 @@ class _TurnSearch:
                 done = hi + 1
         j = parts[0] if len(parts) == 1 else np.concatenate(parts)
         return self._first_in(t0, a0, direction, which, c, s_other, j)
+
+    def _recurring_turn(self, a0, direction, which, c, s_other):
+        """:meth:`first_pass` of a turn that starts where one started before, on a
+        static base; :data:`_SEARCH` for the first turn from that angle.
+
+        On a static base a turn's samples depend only on its start angle, direction and
+        test (not on its start time), and a static run starts its turns from a handful
+        of table angles again and again, with only the stop sums' term ``c`` changing.
+        From the second turn on, the turn's samples (all of them, with the rule's own
+        operations) are kept with their ``main`` values sorted (those meeting the sign
+        condition), so the samples that can pass, ``|main + c| < delta``, are a range
+        found by two binary searches (widened by 1e-12, far beyond the sum's
+        round-off) and tested exactly; the first that passes is the answer.
+        """
+        key = (a0, direction, which)
+        seen = self._recurring.get(key)
+        if seen is None:
+            self._recurring[key] = {}
+            return _SEARCH
+        if s_other not in seen:
+            if "main" not in seen:
+                seen["main"], seen["other"] = self.values(0.0, a0, direction, which, self.j)
+            main, other = seen["main"], seen["other"]
+            idx = (
+                np.arange(len(main)) if s_other == 0 else np.flatnonzero(np.sign(other) == -s_other)
+            )
+            idx = idx[np.argsort(main[idx], kind="stable")]
+            seen[s_other] = (idx, main[idx])
+        idx, ordered = seen[s_other]
+        reach = self.rule.delta + 1e-12
+        lo = int(np.searchsorted(ordered, -c - reach, side="left"))
+        hi = int(np.searchsorted(ordered, -c + reach, side="right"))
+        if lo >= hi:
+            return None
+        cand = idx[lo:hi]
+        hit = cand[np.abs(seen["main"][cand] + c) < self.rule.delta]
+        return int(hit.min()) + 1 if len(hit) else None
 
     def _narrow(self, i: int, e0: float, e1: float, more: float) -> tuple[int, int]:
         """The samples of coarse stretch ``i`` where the line through its ends is in reach.
