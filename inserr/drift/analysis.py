@@ -123,6 +123,15 @@ class DriftResult:
         return worst_case_norm(self.source_horizontal, signs=False)[0]
 
 
+@dataclass
+class _Curves:
+    """The arrays :class:`DriftResult`'s derived curves read, for computing them before
+    the result is made (:func:`analyze_drift`)."""
+
+    nav: np.ndarray | None = None
+    source_horizontal: np.ndarray | None = None
+
+
 def output_grid(duration: float, step: float) -> np.ndarray:
     """Output times 0, step, 2 step, ..., and the final time (always included).
 
@@ -294,15 +303,29 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
         (nav, coarse), noise_cov = run_blocks([constants, noise])
     else:
         (nav, coarse), noise_cov = constants(), noise()
-    att = attitude_error(site, nav)
     if sources:
         src_h = np.moveaxis(coarse[:, DR, :][:, :2, :], 1, 2)  # (Mc, N, 2)
-        src_head = attitude_error(site, np.moveaxis(coarse, 1, 2))[..., 2]
     else:
         src_h = np.zeros((len(t_cov), 0, 2))
-        src_head = np.zeros((len(t_cov), 0))
 
+    # The derived curves are independent of each other: those of the fine grid beside
+    # those of the per-source responses (the worst case over unknown signs the longest),
+    # on up to two threads. The three cached curves are DriftResult's own (same calls).
+    def fine_curves() -> tuple:
+        return attitude_error(site, nav), DriftResult.horizontal.func(_Curves(nav=nav))
+
+    def source_curves() -> tuple:
+        head = (
+            attitude_error(site, np.moveaxis(coarse, 1, 2))[..., 2]
+            if sources
+            else np.zeros((len(t_cov), 0))
+        )
+        of = _Curves(source_horizontal=src_h)
+        return head, DriftResult.rms_horizontal.func(of), DriftResult.worst_horizontal.func(of)
+
+    (att, horizontal), (src_head, rms, worst) = run_blocks([fine_curves, source_curves])
     res = DriftResult(t, nav, att, t_cov, sources, src_h, src_head, noise_cov)
+    vars(res).update(horizontal=horizontal, rms_horizontal=rms, worst_horizontal=worst)
     res.engine = engine_info
     res.metrics = headline(res)
     return res

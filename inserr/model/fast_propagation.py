@@ -709,12 +709,11 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     def fine_block(lo: int, hi: int):
         def work() -> None:
             tb = t_fine[lo:hi]
-            at_zero = tb <= MERGE
-            inside = np.flatnonzero(~at_zero)
+            n0 = int(np.searchsorted(tb, MERGE, side="right"))  # outputs at t = 0 first
             block = fine[lo:hi]
-            block[at_zero] = modes.to_nav(z0[None])[0]
-            if len(inside):
-                block[inside] = run.fine_nav(tb[inside], h)
+            block[:n0] = modes.to_nav(z0[None])[0]
+            if n0 < len(tb):
+                run.fine_nav(tb[n0:], h, out=block[n0:])
 
         return work
 
@@ -1014,7 +1013,7 @@ class _Run:
         found once per piece (at the middle of its first window), and once for all the
         stops that hold the same attitude (to 1e-12; a cycle's positions recur), then
         shared by the windows the coarse grid cuts the stops into. The windows' weights
-        are summed into their coarse intervals by one sparse product per mode.
+        are summed into their coarse intervals by one sparse product.
         """
         win = self.win
         idx = np.flatnonzero(win.kind == STILL)
@@ -1057,7 +1056,7 @@ class _Run:
         with the same start attitude and angular velocity (to 1e-12; a static base
         repeats its cycle's turns) share them, and every source's input per harmonic
         (the sources' linear forms applied to ``F_k``) too, so a window costs its five
-        weights per mode, summed into its coarse interval by one sparse product per mode.
+        weights per mode, summed into its coarse interval by one sparse product.
         """
         win, lam = self.win, self.lam
         idx = np.flatnonzero(win.kind == ROTATION)
@@ -1369,16 +1368,22 @@ class _Run:
         if hasattr(self, "cached_template") and fine_aligned(self.step, dt_fine):
             self._cached_nav_table(dt_fine)
 
-    def fine_nav(self, t: np.ndarray, dt_fine: float | None) -> np.ndarray:
-        """Signed navigation errors at times ``t`` (s, > 0, increasing), (len(t), 9).
+    def fine_nav(
+        self, t: np.ndarray, dt_fine: float | None, out: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Signed navigation errors at times ``t`` (s, > 0, increasing), (len(t), 9), in
+        ``out`` if given (C-contiguous rows).
 
         On a uniform output grid the homogeneous part of every window is one real
         matrix product per window shape (:meth:`_nav_on_grid`); otherwise the modal
         states of :meth:`fine_states` are mapped to navigation errors.
         """
+        if out is None:
+            out = np.empty((len(t), 9))
         if dt_fine is None or not len(t):
             self.paths.add("fine-each")
-            return self.modes.to_nav(self.fine_states(t, dt_fine))
+            out[:] = self.modes.to_nav(self.fine_states(t, dt_fine))
+            return out
         full = self.full if self.full is not None else self.win
         wf = _window_of(full.b, t)
         if self.full is None:
@@ -1391,9 +1396,10 @@ class _Run:
         table = _OffsetTable(self.lam, dt, dt_fine, wf)
         if table.k is None:
             self.paths.add("fine-each")
-            return self.modes.to_nav(self.fine_states(t, dt_fine))
+            out[:] = self.modes.to_nav(self.fine_states(t, dt_fine))
+            return out
         self.paths.add("fine-grid")
-        return self._nav_on_grid(table, w, wf, dt, dt_fine)
+        return self._nav_on_grid(table, w, wf, dt, dt_fine, out)
 
     def _run_lead(self) -> np.ndarray:
         """Per window: the first window of its chain of still windows, or of turn
@@ -1414,7 +1420,7 @@ class _Run:
             self._memo["lead"] = np.maximum.accumulate(np.where(joined, 0, idx))
         return self._memo["lead"]
 
-    def _nav_on_grid(self, table, w, wf, dt, dt_fine) -> np.ndarray:
+    def _nav_on_grid(self, table, w, wf, dt, dt_fine, out) -> np.ndarray:
         """Navigation errors at outputs ``dt = delta + k h`` into their windows.
 
         The state is ``e^{lambda k h} X + T_phi(k) U + e^{lambda k h} e^{lambda delta} J``
@@ -1468,7 +1474,6 @@ class _Run:
             rot_cls[rot_run] = cls.reshape(-1)
         coef = np.concatenate([x_run, u_run, rot_coef], axis=1).view(float)  # re, im pairs
         vw = (modes.out * modes.weight[None, :]).T  # (R, 9): x = Re(sum_r z_r vw[r])
-        out = np.empty((len(k), 9))
         rows_of = _ROW9  # each output's nine values as one item: a faster scatter below
         out_rows = out.view(rows_of).reshape(-1)
         # Cached windows on the output grid start on it (delta = 0, k0 = 1) and hold one

@@ -360,10 +360,10 @@ def _realized_period(
         for m in range(1, REALIZED_SEGMENTS + 1):
             if j0 + 2 * m > n or 2 * (table.t0[j0 + m] - t0) > duration:
                 break
-            # A cheap necessary condition first: the next m segments last as long.
-            if not np.allclose(
-                table.duration[j0 + m : j0 + 2 * m], table.duration[j0 : j0 + m], rtol=0, atol=1e-9
-            ):
+            # A cheap necessary condition first: the next m segments last as long (to
+            # 1e-9 s; a NaN fails it, as allclose would).
+            step = table.duration[j0 + m : j0 + 2 * m] - table.duration[j0 : j0 + m]
+            if not float(np.max(np.abs(step))) <= 1e-9:
                 continue
             p = float(table.t0[j0 + m] - t0)
             period = p if vehicle is None else _common_period(p, vehicle)
