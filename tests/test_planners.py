@@ -455,3 +455,26 @@ def test_static_turns_from_a_recurring_angle_stop_where_the_search_stops(mountin
             (a0, direction, which)
         ]
     assert answered > 400  # most were answered from the kept samples
+
+
+@pytest.mark.parametrize(
+    "motion",
+    [Motion(**TILT), YawSwing(amplitude=0.0, period=100.0, **TILT), Turn(rate=0.0, **TILT)],
+    ids=["still", "swing-of-zero", "turn-of-zero"],
+)
+@pytest.mark.parametrize("mounting", [None, MOUNT], ids=["aligned", "off-axis"])
+def test_static_stop_sums_are_the_sampled_sums_to_the_bit(motion, mounting):
+    # On a static base every sample of a stop has one heading: the static sums take the
+    # repeated cosine (sine) once and sum it as numpy sums the rule's array. The rule's
+    # own sums (every sample computed) must come out identical, not merely close: the
+    # crossing test can fall exactly on a sample, where round-off decides.
+    from inserr.schemes.closed_loop import _SampledStopSums, _StaticStopSums
+
+    geo = OuterAxisHeading(motion.tilt, mounting)
+    static, sampled = _StaticStopSums(motion, F, geo), _SampledStopSums(motion, F, geo)
+    rng = np.random.default_rng(31)
+    for _ in range(150):
+        k0 = int(rng.integers(0, 3 * 10**7))
+        n = int(rng.choice([1, 7, 128, 129, 30000, 30001, int(rng.integers(1, 60000))]))
+        a = float(rng.uniform(-30.0, 30.0))
+        assert static(k0, k0 + n, a) == sampled(k0, k0 + n, a)

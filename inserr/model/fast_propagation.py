@@ -704,7 +704,11 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
             _lifted_coarse(lam, t_coarse, inputs, lift, coarse_z)
         elif len(t_coarse) > 1:
             coarse_z[1:] = scan(lam, float(t_coarse[0]), z_src0, t_coarse[1:], inputs[1:])
-        return modes.to_nav(coarse_z * sources.value[None, None, :], axis=1)
+        # Scaled by the source values on the way to the (time, source, mode) layout that
+        # the navigation map wants: one pass for both (Re(V c z) is linear, values real).
+        zz = np.empty((len(t_coarse), sources.n, modes.n_modes), dtype=complex)
+        np.multiply(np.moveaxis(coarse_z, 1, 2), sources.value[None, :, None], out=zz)
+        return np.moveaxis(modes.to_nav(zz), -1, 1)  # (Mc, 9, N)
 
     def fine_block(lo: int, hi: int):
         def work() -> None:

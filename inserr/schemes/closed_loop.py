@@ -155,7 +155,8 @@ class _StaticStopSums:
     These are the sampled rule's own sums (same operations), not a closed form: on a
     static base the crossing test can fall exactly on a sample (half a turn from the
     stop), where round-off alone decides, so the sums must round as the rule's do. A
-    static run visits a handful of table angles, so few are computed.
+    static run visits a handful of table angles, so few are computed, each as numpy's
+    sum of the one repeated cosine (sine).
     """
 
     def __init__(self, motion: Motion, f: float, geo: OuterAxisHeading):
@@ -165,7 +166,16 @@ class _StaticStopSums:
     def __call__(self, k0: int, k1: int, a: float) -> tuple[float, float]:
         key = (k1 - k0, a)
         if key not in self._known:
-            self._known[key] = self._sampled(k0, k1, a)
+            # Every sample of the stop has the same heading, so the rule's array of
+            # cosines (sines) is one value repeated: the value from a few samples
+            # (elementwise, the same operations), summed as numpy sums the array.
+            few = self._sampled.motion.heading_at(np.arange(8) / self._sampled.f)
+            h = few + self._sampled.geo.offset(a)
+            n = k1 - k0
+            self._known[key] = (
+                float(np.full(n, np.cos(h)[0]).sum()),
+                float(np.full(n, np.sin(h)[0]).sum()),
+            )
         return self._known[key]
 
 
