@@ -679,6 +679,37 @@ def test_non_finite_results_are_an_error():
     check_finite(Res(), "none")
 
 
+def test_a_drift_result_knows_whether_it_is_finite():
+    # The analysis finds finiteness with its derived curves (on two threads) and keeps
+    # it; a result with one bad entry in any of its arrays must say it is not finite.
+    import dataclasses
+
+    from inserr.core.earth import Site
+    from inserr.core.imu import ImuErrors, InitialErrors
+    from inserr.core.units import DEG_PER_HOUR, DEG_PER_SQRT_HOUR
+    from inserr.drift.analysis import analyze_drift
+    from inserr.drift.validity import check_finite
+    from inserr.model.timeline import Timeline
+
+    imu = ImuErrors(gyro_bias=np.array([0.01, 0.0, 0.0]) * DEG_PER_HOUR,
+                    arw=0.001 * DEG_PER_SQRT_HOUR)  # fmt: skip
+    res = analyze_drift(Site.from_degrees(34.0), imu, InitialErrors(),
+                        Timeline.static(np.eye(3), 1200.0), dt_out=1.0, dt_cov=60.0)  # fmt: skip
+    assert vars(res)["finite"] is True and res.finite
+    check_finite(res, "none")
+    for name in ("nav", "attitude", "source_horizontal", "noise_cov"):
+        for bad in (np.nan, np.inf):
+            if name == "noise_cov":
+                value = {k: np.where(np.eye(9) > 0, bad, v) for k, v in res.noise_cov.items()}
+            else:
+                value = getattr(res, name).copy()
+                value.flat[value.size // 2] = bad
+            broken = dataclasses.replace(res, **{name: value})
+            assert not broken.finite
+            with pytest.raises(InputError, match="non-finite"):
+                check_finite(broken, "none")
+
+
 # --- generated inputs (hypothesis) --------------------------------------------------------
 
 _NUMBERS = st.one_of(

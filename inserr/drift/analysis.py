@@ -26,6 +26,7 @@ from inserr.core.errors import InputError
 from inserr.core.imu import ImuErrors, InitialErrors
 from inserr.core.units import NMI
 from inserr.drift.unknown_signs import rms_norm, worst_case_norm
+from inserr.drift.validity import all_finite
 from inserr.model.attitude_history import AttitudeHistory, TimelineHistory
 from inserr.model.discretization import discretizer_for
 from inserr.model.error_sources import (
@@ -121,6 +122,13 @@ class DriftResult:
     def worst_horizontal(self) -> np.ndarray:
         """Horizontal error of the worst sign combination at each coarse time, m."""
         return worst_case_norm(self.source_horizontal, signs=False)[0]
+
+    @cached_property
+    def finite(self) -> bool:
+        """True if every number of the result is finite (nav, attitude, per-source, noise)."""
+        return all_finite(self.nav, self.attitude) and all_finite(
+            self.source_horizontal, *self.noise_cov.values()
+        )
 
 
 @dataclass
@@ -311,8 +319,14 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
     # The derived curves are independent of each other: those of the fine grid beside
     # those of the per-source responses (the worst case over unknown signs the longest),
     # on up to two threads. The three cached curves are DriftResult's own (same calls).
+    # The worst case, the longest, is split between the two (its rows are independent).
+    cut = len(t_cov) // 3
+
     def fine_curves() -> tuple:
-        return attitude_error(site, nav), DriftResult.horizontal.func(_Curves(nav=nav))
+        att = attitude_error(site, nav)
+        horizontal = DriftResult.horizontal.func(_Curves(nav=nav))
+        worst = DriftResult.worst_horizontal.func(_Curves(source_horizontal=src_h[:cut]))
+        return att, horizontal, worst, all_finite(nav, att)
 
     def source_curves() -> tuple:
         head = (
@@ -320,12 +334,20 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
             if sources
             else np.zeros((len(t_cov), 0))
         )
-        of = _Curves(source_horizontal=src_h)
-        return head, DriftResult.rms_horizontal.func(of), DriftResult.worst_horizontal.func(of)
+        rms = DriftResult.rms_horizontal.func(_Curves(source_horizontal=src_h))
+        worst = DriftResult.worst_horizontal.func(_Curves(source_horizontal=src_h[cut:]))
+        return head, rms, worst, all_finite(src_h, *noise_cov.values())
 
-    (att, horizontal), (src_head, rms, worst) = run_blocks([fine_curves, source_curves])
+    (att, horizontal, worst_a, fine_ok), (src_head, rms, worst_b, source_ok) = run_blocks(
+        [fine_curves, source_curves]
+    )
     res = DriftResult(t, nav, att, t_cov, sources, src_h, src_head, noise_cov)
-    vars(res).update(horizontal=horizontal, rms_horizontal=rms, worst_horizontal=worst)
+    vars(res).update(
+        horizontal=horizontal,
+        rms_horizontal=rms,
+        worst_horizontal=np.concatenate([worst_a, worst_b]),
+        finite=fine_ok and source_ok,
+    )
     res.engine = engine_info
     res.metrics = headline(res)
     return res

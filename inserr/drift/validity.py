@@ -86,17 +86,27 @@ def check_vertical(site: Site, duration: float, vertical: str) -> list[str]:
     ]
 
 
+def all_finite(*arrays: np.ndarray) -> bool:
+    """True if every entry of every array is finite.
+
+    A NaN or an infinity makes the sum non-finite, so a finite sum proves every entry
+    finite in one pass without temporaries; a non-finite sum (an entry, or an overflow
+    of the sum itself) is settled entry by entry.
+    """
+    return all(bool(np.isfinite(np.sum(a))) or bool(np.all(np.isfinite(a))) for a in arrays)
+
+
 def check_finite(res, scheme: str) -> None:
-    """InputError if any number of a drift result is not finite.
+    """InputError if any number of a drift result is not finite (:attr:`DriftResult.finite
+    <inserr.drift.analysis.DriftResult.finite>`).
 
     Inside the documented input ranges this does not happen; it guards the edge
     anyway, so that no NaN or infinity ever reaches a report or the JSON.
     """
-    arrays = [res.nav, res.attitude, res.source_horizontal, *res.noise_cov.values()]
-    # A NaN or an infinity makes the sum non-finite, so a finite sum proves every entry
-    # finite in one pass without temporaries; a non-finite sum (an entry, or an overflow
-    # of the sum itself) is settled entry by entry.
-    if all(np.isfinite(np.sum(a)) or np.all(np.isfinite(a)) for a in arrays):
+    finite = getattr(res, "finite", None)  # a DriftResult knows (computed with its curves)
+    if finite is None:
+        finite = all_finite(res.nav, res.attitude, res.source_horizontal, *res.noise_cov.values())
+    if finite:
         return
     raise InputError(
         "scenario",

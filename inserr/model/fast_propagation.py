@@ -51,6 +51,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.lib.stride_tricks import as_strided
 from scipy import sparse
 from threadpoolctl import ThreadpoolController
 
@@ -98,10 +99,6 @@ def phi1(z: np.ndarray) -> np.ndarray:
     out = np.expm1(zz) / zz
     out[zero] = 1.0
     return out
-
-
-#: Nine float64 values as one item (a navigation vector), for row scatters.
-_ROW9 = np.dtype((np.void, 72))
 
 
 class _OffsetTable:
@@ -1382,6 +1379,9 @@ class _Run:
         matrix product per window shape (:meth:`_nav_on_grid`); otherwise the modal
         states of :meth:`fine_states` are mapped to navigation errors.
         """
+        if out is not None and not out.flags.c_contiguous:
+            out[:] = self.fine_nav(t, dt_fine)  # the products write whole runs of rows
+            return out
         if out is None:
             out = np.empty((len(t), 9))
         if dt_fine is None or not len(t):
@@ -1478,8 +1478,6 @@ class _Run:
             rot_cls[rot_run] = cls.reshape(-1)
         coef = np.concatenate([x_run, u_run, rot_coef], axis=1).view(float)  # re, im pairs
         vw = (modes.out * modes.weight[None, :]).T  # (R, 9): x = Re(sum_r z_r vw[r])
-        rows_of = _ROW9  # each output's nine values as one item: a faster scatter below
-        out_rows = out.view(rows_of).reshape(-1)
         # Cached windows on the output grid start on it (delta = 0, k0 = 1) and hold one
         # whole phase step: their in-window part is a block of navigation errors per
         # (class, phase, table), added to the product of their shape (one zero block
@@ -1537,8 +1535,11 @@ class _Run:
             vals = coef[runs, : 2 * parts * n_r] @ mats.reshape(2 * parts * n_r, c * 9)
             if cached_block is not None and kk == 1 and c == cached_block.shape[1] // 9:
                 vals += cached_block[cached_key[runs]]
-            pts = (first[runs][:, None] + np.arange(c)[None, :]).ravel()
-            out_rows[pts] = np.ascontiguousarray(vals).view(rows_of).reshape(-1)
+            # Each run's c outputs are c consecutive rows of out: seen through a view
+            # whose row i is rows i .. i + c - 1, a run is one item of c x 9 values (the
+            # runs do not overlap, so neither do the writes).
+            by_run = as_strided(out, shape=(len(out) - c + 1, c * 9), strides=out.strides)
+            by_run[first[runs]] = vals
         if partial is not None:
             p_run, _, rows = partial
             pts = np.flatnonzero(np.isin(run, np.flatnonzero(p_run)))
