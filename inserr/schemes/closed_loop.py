@@ -18,6 +18,7 @@ Any other motion is sampled in full.
 
 from __future__ import annotations
 
+import bisect
 import cmath
 import math
 from dataclasses import dataclass, field
@@ -505,7 +506,9 @@ class _TurnSearch:
         operations) are kept with their ``main`` values sorted (those meeting the sign
         condition), so the samples that can pass, ``|main + c| < delta``, are a range
         found by two binary searches (widened by 1e-12, far beyond the sum's
-        round-off) and tested exactly; the first that passes is the answer.
+        round-off) and tested exactly; the first that passes is the answer. The last
+        answer is tried first: it stands if it still passes and none of the samples
+        before it comes within reach.
         """
         key = (a0, direction, which)
         seen = self._recurring.get(key)
@@ -520,16 +523,31 @@ class _TurnSearch:
                 np.arange(len(main)) if s_other == 0 else np.flatnonzero(np.sign(other) == -s_other)
             )
             idx = idx[np.argsort(main[idx], kind="stable")]
-            seen[s_other] = (idx, main[idx])
-        idx, ordered = seen[s_other]
-        reach = self.rule.delta + 1e-12
+            seen[s_other] = (idx, main[idx], [])
+        idx, ordered, last = seen[s_other]
+        delta = self.rule.delta
+        reach = delta + 1e-12
+        if last:
+            # The answer of the last turn from here, n: it stands if sample n still
+            # passes and no earlier one comes within reach (the same float operations
+            # on Python floats; the earlier samples' values sorted in a list).
+            n, main_n, before = last
+            if abs(main_n + c) < delta and bisect.bisect_left(
+                before, -c - reach
+            ) == bisect.bisect_right(before, -c + reach):
+                return n
         lo = int(np.searchsorted(ordered, -c - reach, side="left"))
         hi = int(np.searchsorted(ordered, -c + reach, side="right"))
         if lo >= hi:
             return None
         cand = idx[lo:hi]
-        hit = cand[np.abs(seen["main"][cand] + c) < self.rule.delta]
-        return int(hit.min()) + 1 if len(hit) else None
+        hit = cand[np.abs(seen["main"][cand] + c) < delta]
+        if not len(hit):
+            return None
+        first = int(hit.min())
+        earlier = idx < first
+        last[:] = [first + 1, float(seen["main"][first]), np.sort(ordered[earlier]).tolist()]
+        return first + 1
 
     def _narrow(self, i: int, e0: float, e1: float, more: float) -> tuple[int, int]:
         """The samples of coarse stretch ``i`` where the line through its ends is in reach.
