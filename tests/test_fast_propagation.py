@@ -1272,3 +1272,19 @@ def test_static_runs_of_whole_stops_and_turns_equal_the_per_output_path(monkeypa
     at_cov = np.isin(res.t, res.t_cov)
     signed = res.source_horizontal.sum(axis=1)  # values are signed: the sum is the run
     assert _relative(signed, res.nav[at_cov][:, 6:8]) < 1e-11
+
+
+def test_derived_curves_made_with_the_result_are_its_own_to_the_bit():
+    # The analysis computes the derived curves on two threads while it makes the result
+    # (the worst case over unknown signs split between them by rows) and keeps them as
+    # the result's cached properties: they must be exactly what the properties compute.
+    static = Motion(heading=30 * DEG, pitch=1 * DEG, roll=-2 * DEG)
+    dur = 2 * 3600.0
+    hist = ScheduleHistory(build_scheme("four-position-modified", 6 * DEG, 300.0).plan(static, dur),
+                           static, dur)  # fmt: skip
+    res = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    fresh = dataclasses.replace(res)  # a new result: its properties computed on first use
+    for name in ("horizontal", "rms_horizontal", "worst_horizontal", "finite"):
+        assert name in vars(res) and name not in vars(fresh)
+        assert np.array_equal(getattr(res, name), getattr(fresh, name)), name
+    assert res.finite is True
