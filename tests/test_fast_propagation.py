@@ -1284,7 +1284,7 @@ def test_derived_curves_made_with_the_result_are_its_own_to_the_bit():
                            static, dur)  # fmt: skip
     res = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
     fresh = dataclasses.replace(res)  # a new result: its properties computed on first use
-    for name in ("horizontal", "rms_horizontal", "worst_horizontal", "finite"):
+    for name in ("horizontal", "rms_horizontal", "worst_horizontal", "finite", "attitude_extent"):
         assert name in vars(res) and name not in vars(fresh)
         assert np.array_equal(getattr(res, name), getattr(fresh, name)), name
     assert res.finite is True

@@ -679,6 +679,17 @@ def test_non_finite_results_are_an_error():
     check_finite(Res(), "none")
 
 
+def test_attitude_extent_is_the_largest_tilt_and_heading_error():
+    from inserr.drift.validity import attitude_extent
+
+    rng = np.random.default_rng(3)
+    att = rng.normal(size=(1001, 3))
+    att[500, 1], att[17, 2] = -9.0, 7.0  # a negative tilt and a positive heading extreme
+    assert attitude_extent(att) == (9.0, 7.0)
+    assert attitude_extent(-att) == (9.0, 7.0)
+    assert attitude_extent(np.zeros((0, 3))) == (0.0, 0.0)
+
+
 def test_a_drift_result_knows_whether_it_is_finite():
     # The analysis finds finiteness with its derived curves (on two threads) and keeps
     # it; a result with one bad entry in any of its arrays must say it is not finite.

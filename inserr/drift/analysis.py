@@ -26,7 +26,7 @@ from inserr.core.errors import InputError
 from inserr.core.imu import ImuErrors, InitialErrors
 from inserr.core.units import NMI
 from inserr.drift.unknown_signs import rms_norm, worst_case_norm
-from inserr.drift.validity import all_finite
+from inserr.drift.validity import all_finite, attitude_extent
 from inserr.model.attitude_history import AttitudeHistory, TimelineHistory
 from inserr.model.discretization import discretizer_for
 from inserr.model.error_sources import (
@@ -122,6 +122,11 @@ class DriftResult:
     def worst_horizontal(self) -> np.ndarray:
         """Horizontal error of the worst sign combination at each coarse time, m."""
         return worst_case_norm(self.source_horizontal, signs=False)[0]
+
+    @cached_property
+    def attitude_extent(self) -> tuple[float, float]:
+        """Largest tilt (E, N) and heading error magnitudes over the run, rad."""
+        return attitude_extent(self.attitude)
 
     @cached_property
     def finite(self) -> bool:
@@ -320,13 +325,13 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
     # those of the per-source responses (the worst case over unknown signs the longest),
     # on up to two threads. The three cached curves are DriftResult's own (same calls).
     # The worst case, the longest, is split between the two (its rows are independent).
-    cut = len(t_cov) // 3
+    cut = len(t_cov) // 4
 
     def fine_curves() -> tuple:
         att = attitude_error(site, nav)
         horizontal = DriftResult.horizontal.func(_Curves(nav=nav))
         worst = DriftResult.worst_horizontal.func(_Curves(source_horizontal=src_h[:cut]))
-        return att, horizontal, worst, all_finite(nav, att)
+        return att, horizontal, worst, all_finite(nav, att), attitude_extent(att)
 
     def source_curves() -> tuple:
         head = (
@@ -338,7 +343,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
         worst = DriftResult.worst_horizontal.func(_Curves(source_horizontal=src_h[cut:]))
         return head, rms, worst, all_finite(src_h, *noise_cov.values())
 
-    (att, horizontal, worst_a, fine_ok), (src_head, rms, worst_b, source_ok) = run_blocks(
+    (att, horizontal, worst_a, fine_ok, extent), (src_head, rms, worst_b, source_ok) = run_blocks(
         [fine_curves, source_curves]
     )
     res = DriftResult(t, nav, att, t_cov, sources, src_h, src_head, noise_cov)
@@ -347,6 +352,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
         rms_horizontal=rms,
         worst_horizontal=np.concatenate([worst_a, worst_b]),
         finite=fine_ok and source_ok,
+        attitude_extent=extent,
     )
     res.engine = engine_info
     res.metrics = headline(res)

@@ -116,6 +116,17 @@ def check_finite(res, scheme: str) -> None:
     )
 
 
+def attitude_extent(attitude: np.ndarray) -> tuple[float, float]:
+    """Largest ``|tilt|`` (E and N) and ``|heading error|`` of attitude errors (M, 3), rad
+    (0 for none)."""
+    if not attitude.size:
+        return 0.0, 0.0
+    # Rows of one component each: whole-array reductions, not strided column ones.
+    rows = np.ascontiguousarray(attitude.T)
+    tilt, head = rows[:2], rows[2]
+    return max(float(tilt.max()), -float(tilt.min())), max(float(head.max()), -float(head.min()))
+
+
 def linear_validity_warnings(res, site: Site) -> list[str]:
     """Warnings when a drift result leaves the range where the linear psi model holds.
 
@@ -131,14 +142,11 @@ def linear_validity_warnings(res, site: Site) -> list[str]:
         the run stays inside all three.
     """
     out = []
-    att = res.attitude if res.attitude.size else np.zeros((1, 3))
-
-    def largest(a: np.ndarray) -> float:  # max |a| without a copy of |a|
-        return max(float(a.max()), -float(a.min()))
-
+    extent = getattr(res, "attitude_extent", None)  # a DriftResult has it with its curves
+    tilt, heading = extent if extent is not None else attitude_extent(res.attitude)
     for what, value, limit in (
-        ("tilt", largest(att[:, :2]), TILT_LIMIT),
-        ("heading", largest(att[:, 2]), HEADING_LIMIT),
+        ("tilt", tilt, TILT_LIMIT),
+        ("heading", heading, HEADING_LIMIT),
     ):
         if value > limit:
             out.append(
