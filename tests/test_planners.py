@@ -459,8 +459,18 @@ def test_static_turns_from_a_recurring_angle_stop_where_the_search_stops(mountin
 
 @pytest.mark.parametrize(
     "motion",
-    [Motion(**TILT), YawSwing(amplitude=0.0, period=100.0, **TILT), Turn(rate=0.0, **TILT)],
-    ids=["still", "swing-of-zero", "turn-of-zero"],
+    [
+        Motion(**TILT),
+        YawSwing(amplitude=0.0, period=100.0, **TILT),
+        Turn(rate=0.0, **TILT),
+        HeadingHistory(
+            times=np.array([0.0, 50.0, 4e5]),
+            headings=np.full(3, 0.7),
+            pitch=TILT["pitch"],
+            roll=TILT["roll"],
+        ),  # fmt: skip
+    ],
+    ids=["still", "swing-of-zero", "turn-of-zero", "history-of-one-heading"],
 )
 @pytest.mark.parametrize("mounting", [None, MOUNT], ids=["aligned", "off-axis"])
 def test_static_stop_sums_are_the_sampled_sums_to_the_bit(motion, mounting):
