@@ -1288,3 +1288,47 @@ def test_derived_curves_made_with_the_result_are_its_own_to_the_bit():
         assert name in vars(res) and name not in vars(fresh)
         assert np.array_equal(getattr(res, name), getattr(fresh, name)), name
     assert res.finite is True
+
+
+@pytest.mark.parametrize("case", ["steady-turn", "long-timeline-turn"])
+def test_long_turns_keep_their_exact_rate_in_runs(case):
+    # A run of a turn spans the whole piece (cut every RUN_OUTPUTS outputs): its tables
+    # must use the turn's exact rate, or a phase error grows with the run (a rate
+    # rounded to 1e-12 rad/s gave 1e-9 of the response after 24 h of a steady turn). The
+    # 1 s outputs (runs, products) against the 7 s ones (each from its own window).
+    rate = 0.01234567891234567  # rad/s, no round number of 1e-12 rad/s
+    if case == "steady-turn":
+        motion = Turn(rate=rate, pitch=1 * DEG, roll=-2 * DEG)
+        dur = 24 * 3600.0
+        hist = ScheduleHistory(build_scheme("none", 6 * DEG, 300.0).plan(motion, dur), motion, dur)
+    else:
+        dur = 20 * 3600.0
+        c0 = Rotation.from_euler("zyx", [0.3, 0.01, -0.02]).as_matrix()
+        c1 = Rotation.from_euler("z", rate * dur).as_matrix() @ c0
+        hist = Timeline(np.array([0.0, dur]), np.stack([c0, c1]), np.array([[0.0, 0.0, rate]]))
+    ones = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+    sevens = analyze_drift(SITE, IMU, INIT, hist, dt_out=7.0, dt_cov=60.0)
+    assert "rotation-products" in ones.engine["paths"]
+    common, back = np.isin(ones.t, sevens.t), np.isin(sevens.t, ones.t)
+    # Round-off of the products and tables: 1e-14 of the response seen; 1e-11 is a
+    # wide bound that the rounded rate failed by two orders.
+    assert _relative(ones.nav[common], sevens.nav[back]) < 1e-11
+    assert _relative(ones.attitude[common], sevens.attitude[back]) < 1e-11
+
+
+def test_runs_cut_anywhere_give_the_same_outputs(monkeypatch):
+    # Runs are cut every RUN_OUTPUTS outputs (bounding the products' tables): the
+    # outputs must not depend on where, here cut every 37 outputs instead of 4096.
+    static = Motion(heading=30 * DEG, pitch=1 * DEG, roll=-2 * DEG)
+    dur = 3 * 3600.0
+    cases = [ScheduleHistory(build_scheme("four-position-modified", 6 * DEG, 300.0)
+                             .plan(static, dur), static, dur)]  # fmt: skip
+    turn = Turn(rate=0.0123, pitch=1 * DEG, roll=-2 * DEG)
+    cases.append(ScheduleHistory(build_scheme("none", 6 * DEG, 300.0).plan(turn, dur), turn, dur))
+    for hist in cases:
+        whole = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+        with monkeypatch.context() as m:
+            m.setattr(fp, "RUN_OUTPUTS", 37)
+            cut = analyze_drift(SITE, IMU, INIT, hist, dt_out=1.0, dt_cov=60.0)
+        assert _relative(whole.nav, cut.nav) < 1e-12
+        assert _relative(whole.attitude, cut.attitude) < 1e-12

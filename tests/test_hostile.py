@@ -690,7 +690,7 @@ def test_attitude_extent_is_the_largest_tilt_and_heading_error():
     assert attitude_extent(np.zeros((0, 3))) == (0.0, 0.0)
 
 
-def test_a_drift_result_knows_whether_it_is_finite():
+def test_a_drift_result_knows_whether_it_is_finite(monkeypatch):
     # The analysis finds finiteness with its derived curves (on two threads) and keeps
     # it; a result with one bad entry in any of its arrays must say it is not finite.
     import dataclasses
@@ -708,7 +708,7 @@ def test_a_drift_result_knows_whether_it_is_finite():
                         Timeline.static(np.eye(3), 1200.0), dt_out=1.0, dt_cov=60.0)  # fmt: skip
     assert vars(res)["finite"] is True and res.finite
     check_finite(res, "none")
-    for name in ("nav", "attitude", "source_horizontal", "noise_cov"):
+    for name in ("nav", "attitude", "source_horizontal", "source_heading", "noise_cov"):
         for bad in (np.nan, np.inf):
             if name == "noise_cov":
                 value = {k: np.where(np.eye(9) > 0, bad, v) for k, v in res.noise_cov.items()}
@@ -719,6 +719,26 @@ def test_a_drift_result_knows_whether_it_is_finite():
             assert not broken.finite
             with pytest.raises(InputError, match="non-finite"):
                 check_finite(broken, "none")
+    # ... and the value the analysis itself keeps, when the engine gives a bad number
+    # in the fine outputs or in the per-source responses.
+    import inserr.drift.analysis as analysis
+
+    real = analysis.constant_error_response
+    for part in ("fine", "coarse"):
+
+        def poisoned(*args, part=part, **kwargs):
+            resp = real(*args, **kwargs)
+            values = getattr(resp, part)
+            values[len(values) // 2, 2] = np.nan  # psi_U: the heading error, not the horizontal
+            return resp
+
+        monkeypatch.setattr(analysis, "constant_error_response", poisoned)
+        still = Timeline.static(np.eye(3), 1200.0)
+        bad = analyze_drift(Site.from_degrees(34.0), imu, InitialErrors(), still, dt_out=1.0,
+                            dt_cov=60.0)  # fmt: skip
+        assert vars(bad)["finite"] is False
+        with pytest.raises(InputError, match="non-finite"):
+            check_finite(bad, "none")
 
 
 # --- generated inputs (hypothesis) --------------------------------------------------------

@@ -132,7 +132,7 @@ class DriftResult:
     def finite(self) -> bool:
         """True if every number of the result is finite (nav, attitude, per-source, noise)."""
         return all_finite(self.nav, self.attitude) and all_finite(
-            self.source_horizontal, *self.noise_cov.values()
+            self.source_horizontal, self.source_heading, *self.noise_cov.values()
         )
 
 
@@ -341,7 +341,7 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
         )
         rms = DriftResult.rms_horizontal.func(_Curves(source_horizontal=src_h))
         worst = DriftResult.worst_horizontal.func(_Curves(source_horizontal=src_h[cut:]))
-        return head, rms, worst, all_finite(src_h, *noise_cov.values())
+        return head, rms, worst, all_finite(src_h, head, *noise_cov.values())
 
     (att, horizontal, worst_a, fine_ok, extent), (src_head, rms, worst_b, source_ok) = run_blocks(
         [fine_curves, source_curves]

@@ -105,7 +105,8 @@ def check_finite(res, scheme: str) -> None:
     """
     finite = getattr(res, "finite", None)  # a DriftResult knows (computed with its curves)
     if finite is None:
-        finite = all_finite(res.nav, res.attitude, res.source_horizontal, *res.noise_cov.values())
+        arrays = (res.nav, res.attitude, res.source_horizontal, *res.noise_cov.values())
+        finite = all_finite(*arrays, getattr(res, "source_heading", np.zeros(0)))
     if finite:
         return
     raise InputError(

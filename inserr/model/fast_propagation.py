@@ -80,6 +80,9 @@ CHUNK_FINE = 200_000
 #: :func:`engine_threads` threads may compute at once. The blocks depend on the output
 #: count only, never on the thread count: the numbers are the same on any machine.
 SPLIT_FINE = 50_000
+#: Fine outputs of one run of a stop or a turn, at most (plus one window's): longer
+#: pieces are cut into several runs (:meth:`_Run._run_lead`).
+RUN_OUTPUTS = 4096
 #: Largest |Re lambda| * time span of one scan block (keeps exp() within float range).
 SCAN_SPAN = 200.0
 #: Window boundaries closer than this (s) are merged.
@@ -1125,13 +1128,13 @@ class _Run:
         """
         lam = self.lam
         harm = np.arange(-2, 3)
-        rates, cls = np.unique(np.rint(self.rotation_nu[w, -1] * 1e12), return_inverse=True)
+        rates, cls = np.unique(self.rotation_nu[w, -1], return_inverse=True)
         cls = cls.reshape(-1)
         runs, local = np.unique(run, return_inverse=True)
         local = local.reshape(-1)
         k = np.rint((dt - delta[run]) / h).astype(np.int64)
         span = int(k.max()) + 1
-        nu = (rates * 1e-12 / 2.0)[:, None] * harm[None, :]  # (rates, 5) rad/s
+        nu = (rates / 2.0)[:, None] * harm[None, :]  # (rates, 5) rad/s: the windows' own
         mu = 1j * nu[:, :, None] - lam[None, None, :]  # (rates, 5, R)
         grid = (np.arange(span) * h)[None, :, None, None]
         tab = grid * phi1(mu[:, None] * grid)  # (rates, span, 5, R)
@@ -1149,7 +1152,7 @@ class _Run:
         lam = self.lam
         # int_0^d e^{(i nu - lambda) s} ds = d phi1((i nu - lambda) d), evaluated once per
         # distinct (rate, offset) pair: fine times repeat the same offsets turn after turn.
-        rates, cls = np.unique(np.rint(self.rotation_nu[w, -1] * 1e12), return_inverse=True)
+        rates, cls = np.unique(self.rotation_nu[w, -1], return_inverse=True)
         cls = cls.reshape(-1)
         k = np.rint(dt / h).astype(np.int64) if h else None
         if k is not None and np.all(np.abs(dt - k * h) <= 1e-9 * np.maximum(1.0, dt)):
@@ -1161,7 +1164,7 @@ class _Run:
             span = len(uniq_d)
             key = cls * span + kd.reshape(-1)
             d_key = np.tile(uniq_d * 1e-9, len(rates))
-        nu_key = np.repeat(rates * 1e-12 / 2.0, span)[:, None] * np.arange(-2, 3)[None, :]
+        nu_key = np.repeat(rates / 2.0, span)[:, None] * np.arange(-2, 3)[None, :]
         used = np.unique(key)
         d = d_key[used][:, None, None]
         table = np.zeros((len(d_key), ROTATION_SAMPLES, len(lam)), dtype=complex)
@@ -1365,7 +1368,8 @@ class _Run:
     # --- fine output times --------------------------------------------------------------
     def prepare_fine(self, dt_fine: float | None) -> None:
         """Make the tables the fine-output blocks share (before they run at once)."""
-        self._run_lead()
+        if dt_fine is not None:
+            self._run_lead(dt_fine)
         if hasattr(self, "cached_template") and fine_aligned(self.step, dt_fine):
             self._cached_nav_table(dt_fine)
 
@@ -1394,7 +1398,7 @@ class _Run:
             # The windows of one stop or turn (the coarse grid cuts a piece into several)
             # form one run from the first one's start: a piece costs one row of the
             # products of _nav_on_grid, not one per window.
-            wf = self._run_lead()[wf]
+            wf = self._run_lead(dt_fine)[wf]
         w = self.src[wf] if self.src is not None else wf
         dt = t - full.a[wf]
         table = _OffsetTable(self.lam, dt, dt_fine, wf)
@@ -1405,15 +1409,18 @@ class _Run:
         self.paths.add("fine-grid")
         return self._nav_on_grid(table, w, wf, dt, dt_fine, out)
 
-    def _run_lead(self) -> np.ndarray:
-        """Per window: the first window of its chain of still windows, or of turn
-        windows, of one piece (itself for every other window).
+    def _run_lead(self, dt_fine: float) -> np.ndarray:
+        """Per window: the first window of its run (itself for every window neither
+        still nor turning).
 
-        A stop's input is one constant and a turn's one set of harmonics from the
-        turn's first window on (:meth:`rotation_windows`), so outputs anywhere in the
-        piece follow from the first window's start state and data.
+        A run is a chain of still windows, or of turn windows, of one piece, cut every
+        :data:`RUN_OUTPUTS` outputs of step ``dt_fine``. A stop's input is one constant
+        and a turn's one set of harmonics from any of its windows' start on
+        (:meth:`rotation_windows`), so outputs anywhere in the run follow from its first
+        window's start state and data.
         """
-        if "lead" not in self._memo:
+        key = ("lead", dt_fine)
+        if key not in self._memo:
             win = self.win
             closed = (win.kind == STILL) | (win.kind == ROTATION)
             joined = np.zeros(len(closed), dtype=bool)
@@ -1421,8 +1428,15 @@ class _Run:
                 closed[1:] & (win.kind[1:] == win.kind[:-1]) & (win.piece[1:] == win.piece[:-1])
             )
             idx = np.arange(len(closed))
-            self._memo["lead"] = np.maximum.accumulate(np.where(joined, 0, idx))
-        return self._memo["lead"]
+            lead = np.maximum.accumulate(np.where(joined, 0, idx))
+            # A long stop or turn (a steadily turning vehicle, a timeline's interval) is
+            # cut into runs of about RUN_OUTPUTS outputs (plus a window): the products'
+            # tables grow with a run's output count.
+            part = np.floor((win.a - win.a[lead]) / (RUN_OUTPUTS * dt_fine))
+            head = ~joined
+            head[1:] |= part[1:] != part[:-1]
+            self._memo[key] = np.maximum.accumulate(np.where(head, idx, 0))
+        return self._memo[key]
 
     def _nav_on_grid(self, table, w, wf, dt, dt_fine, out) -> np.ndarray:
         """Navigation errors at outputs ``dt = delta + k h`` into their windows.
@@ -1473,8 +1487,9 @@ class _Run:
             x_run[rot_run] += ed[rot_run] * (uk * (d * phi1(mu * d))).sum(axis=1)
             bh = ed[rot_run][:, None, :] * uk * np.exp(mu * d)
             rot_coef[rot_run] = bh.reshape(len(wr), -1)
-            # nu[:, -1] = 2 rho: the turn rate, to 1e-12 rad/s.
-            rates, cls = np.unique(np.rint(nu[:, -1] * 1e12), return_inverse=True)
+            # nu[:, -1] = 2 rho, exactly: each table is built with the rate of its turns
+            # (a rounded rate would put a phase error growing with the run's length).
+            rates, cls = np.unique(nu[:, -1], return_inverse=True)
             rot_cls[rot_run] = cls.reshape(-1)
         coef = np.concatenate([x_run, u_run, rot_coef], axis=1).view(float)  # re, im pairs
         vw = (modes.out * modes.weight[None, :]).T  # (R, 9): x = Re(sum_r z_r vw[r])
@@ -1523,7 +1538,7 @@ class _Run:
             if cls >= 0:
                 # e^{lambda k h} T_h(k) of this turn rate, harmonics -2..2.
                 grid = (ks * dt_fine)[:, None, None]
-                mu = 1j * (rates[cls] * 1e-12 / 2.0) * harm[None, :, None] - lam[None, None, :]
+                mu = 1j * (rates[cls] / 2.0) * harm[None, :, None] - lam[None, None, :]
                 th = table._exp[ks][:, None, :] * (grid * phi1(mu * grid))  # (c, 5, R)
                 tabs += [th[:, h] for h in range(ROTATION_SAMPLES)]
             parts = len(tabs)
