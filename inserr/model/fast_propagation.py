@@ -681,7 +681,8 @@ def _constant_error_response(model, history, sources, t_fine, t_coarse):
     # engine_threads(); the sampled windows' per-source inputs are added after the
     # template's, as when they ran one after the other (identical to the last bit).
     sink: list = []
-    run_blocks([run.cached_windows, lambda: run.direct_windows(sink)])
+    if np.any((win.kind == CACHED) | (win.kind == PARTIAL) | (win.kind == DIRECT)):
+        run_blocks([run.cached_windows, lambda: run.direct_windows(sink)])
     run.add_inputs(sink)
     inputs = run.inputs
     if lift is not None:
