@@ -103,7 +103,7 @@ class DriftResult:
     @cached_property
     def horizontal(self) -> np.ndarray:
         """Deterministic horizontal position error magnitude, m, on the fine grid."""
-        return np.hypot(self.nav[:, 6], self.nav[:, 7])
+        return _horizontal(self.nav)
 
     @cached_property
     def noise_horizontal_sigma(self) -> np.ndarray:
@@ -121,7 +121,7 @@ class DriftResult:
     @cached_property
     def worst_horizontal(self) -> np.ndarray:
         """Horizontal error of the worst sign combination at each coarse time, m."""
-        return worst_case_norm(self.source_horizontal, signs=False)[0]
+        return _worst_horizontal(self.source_horizontal)
 
     @cached_property
     def attitude_extent(self) -> tuple[float, float]:
@@ -136,13 +136,14 @@ class DriftResult:
         )
 
 
-@dataclass
-class _Curves:
-    """The arrays :class:`DriftResult`'s derived curves read, for computing them before
-    the result is made (:func:`analyze_drift`)."""
+def _horizontal(nav: np.ndarray) -> np.ndarray:
+    """Horizontal position error magnitude, m, of navigation states (M, 9)."""
+    return np.hypot(nav[:, 6], nav[:, 7])
 
-    nav: np.ndarray | None = None
-    source_horizontal: np.ndarray | None = None
+
+def _worst_horizontal(source_horizontal: np.ndarray) -> np.ndarray:
+    """Horizontal error of the worst sign combination, m, per row of (M, N, 2)."""
+    return worst_case_norm(source_horizontal, signs=False)[0]
 
 
 def output_grid(duration: float, step: float) -> np.ndarray:
@@ -322,16 +323,15 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
         src_h = np.zeros((len(t_cov), 0, 2))
 
     # The derived curves are independent of each other: those of the fine grid beside
-    # those of the per-source responses (the worst case over unknown signs the longest),
-    # on up to two threads. The three cached curves are DriftResult's own (same calls).
-    # The worst case, the longest, is split between the two (its rows are independent).
+    # those of the per-source responses, on up to two threads, with the worst case over
+    # unknown signs (the longest; its rows are independent) split between the two. The
+    # cached curves are computed as DriftResult's properties compute them.
     cut = len(t_cov) // 4
 
     def fine_curves() -> tuple:
         att = attitude_error(site, nav)
-        horizontal = DriftResult.horizontal.func(_Curves(nav=nav))
-        worst = DriftResult.worst_horizontal.func(_Curves(source_horizontal=src_h[:cut]))
-        return att, horizontal, worst, all_finite(nav, att), attitude_extent(att)
+        worst = _worst_horizontal(src_h[:cut])
+        return att, _horizontal(nav), worst, all_finite(nav, att), attitude_extent(att)
 
     def source_curves() -> tuple:
         head = (
@@ -339,9 +339,8 @@ def _analyze_drift(site, imu, init, history, dt_out, dt_cov, vertical, engine, s
             if sources
             else np.zeros((len(t_cov), 0))
         )
-        rms = DriftResult.rms_horizontal.func(_Curves(source_horizontal=src_h))
-        worst = DriftResult.worst_horizontal.func(_Curves(source_horizontal=src_h[cut:]))
-        return head, rms, worst, all_finite(src_h, head, *noise_cov.values())
+        worst = _worst_horizontal(src_h[cut:])
+        return head, rms_norm(src_h), worst, all_finite(src_h, head, *noise_cov.values())
 
     (att, horizontal, worst_a, fine_ok, extent), (src_head, rms, worst_b, source_ok) = run_blocks(
         [fine_curves, source_curves]

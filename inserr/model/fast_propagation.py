@@ -1002,6 +1002,10 @@ class _Run:
     def _imu_features(self, t, piece):
         c, w_ns = self.history.evaluate(t, piece)
         self._count(len(t))
+        return self._features_of(c, w_ns)
+
+    def _features_of(self, c: np.ndarray, w_ns: np.ndarray) -> np.ndarray:
+        """Features (K, 63) of attitudes ``c`` (K, 3, 3) turning at ``w_ns`` (K, 3) rad/s."""
         w_is = np.einsum("nji,nj->ni", c, self.earth + w_ns)  # C^T (Omega + w): IMU frame
         f_s = np.einsum("nji,j->ni", c, self.f_n)  # C^T f: IMU frame
         return _features(c, w_is, f_s)
@@ -1030,10 +1034,7 @@ class _Run:
         c, w_ns = self.history.evaluate(0.5 * (win.a[sel] + win.b[sel]), win.piece[sel])
         self._count(len(sel))
         rep, of_key = _distinct(c, w_ns)
-        c, w_ns = c[rep], w_ns[rep]
-        w_is = np.einsum("nji,nj->ni", c, self.earth + w_ns)  # C^T (Omega + w): IMU frame
-        f_s = np.einsum("nji,j->ni", c, self.f_n)  # C^T f: IMU frame
-        feats = _features(c, w_is, f_s)  # (G, 63): one row per distinct attitude
+        feats = self._features_of(c[rep], w_ns[rep])  # (G, 63): one row per distinct attitude
         held = of_key.reshape(-1)[of_piece.reshape(-1)]  # distinct attitude of each window
         wt = length[:, None] * phi1(self.lam[None, :] * length[:, None])  # int_0^L e^{lambda s}
         u = _apply_form(feats, self.a_sig)[held]
